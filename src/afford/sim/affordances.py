@@ -1,0 +1,208 @@
+"""Affordances and the ground-truth detector (paper II.A and III.B).
+
+An affordance of type a exists at a point p (a 3D point plus a gripper angle) if and only if
+the robot can *commence* the action there: the gripper state allows it (grasp and turn with an
+empty gripper, place while holding), inverse kinematics reaches the commencement pose within
+the joint limits, and a gripper-shaped probe (holding a copy of the held object, for place) is
+collision-free at that pose. Nothing is said about what executing it will do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+import mujoco
+import numpy as np
+
+from afford.sim.constants import BLOCK, GRIPPER, MOTION, SUPPORT
+from afford.sim.mjcf import PROBE_BODIES, park_position
+
+TYPES = ("grasp", "place", "turn")
+QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)
+TURN_PARAMETERS = (90, -90)
+UPRIGHT_COS = 0.9  # a cup whose axis is this close to vertical is rotationally symmetric
+
+
+@dataclass(frozen=True)
+class Affordance:
+    """One affordance: where and how an action can be commenced.
+
+    type: grasp, place or turn. position: the target point (x, y, z) in metres, world frame:
+    an object's centre for grasp and turn, a point on a surface for place. angle: gripper yaw
+    in degrees, [0, 360), the direction the fingers open along. symmetric: other angles at the
+    same point give equivalent results. turn: the turn affordance's execution parameter, +90
+    (counter-clockwise seen from above) or -90; 0 for other types and for a turn not yet
+    parametrised (paper II.D fills it in).
+    """
+
+    type: str
+    position: tuple[float, float, float]
+    angle: float
+    symmetric: bool
+    turn: int = 0
+
+    def __post_init__(self):
+        if self.type not in TYPES:
+            raise ValueError(f"unknown affordance type {self.type!r}; expected one of {TYPES}")
+        if self.turn not in (0, 90, -90):
+            raise ValueError(f"turn must be +90, -90 or 0, not {self.turn}")
+
+    def with_turn(self, turn: int) -> Affordance:
+        return replace(self, turn=turn)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["position"] = [round(float(v), 5) for v in self.position]
+        d["angle"] = round(float(self.angle), 3)
+        return d
+
+    @staticmethod
+    def from_dict(d: dict) -> Affordance:
+        return Affordance(d["type"], tuple(float(v) for v in d["position"]), float(d["angle"]),
+                          bool(d["symmetric"]), int(d.get("turn", 0)))
+
+
+def parametrise(affordances: list[Affordance]) -> list[Affordance]:
+    """Fill in execution parameters: each turn becomes +90 and -90 (paper II.D)."""
+    out = []
+    for a in affordances:
+        if a.type == "turn" and a.turn == 0:
+            out.extend(a.with_turn(t) for t in TURN_PARAMETERS)
+        else:
+            out.append(a)
+    return out
+
+
+def hand_pose(tcp: np.ndarray, yaw_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Hand (flange) position and quaternion for a downward tool with its TCP at `tcp`."""
+    a = np.radians(yaw_deg)
+    rot = np.array([[np.cos(a), np.sin(a), 0.0], [np.sin(a), -np.cos(a), 0.0], [0.0, 0.0, -1.0]])
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, rot.flatten())
+    return tcp + np.array([0.0, 0.0, GRIPPER.tcp_depth]), quat
+
+
+def _rot(quat: np.ndarray) -> np.ndarray:
+    m = np.zeros(9)
+    mujoco.mju_quat2Mat(m, quat)
+    return m.reshape(3, 3)
+
+
+def _top_point(pos: np.ndarray, quat: np.ndarray, half: tuple[float, float, float], along_x: float = 0.0):
+    """A point on the upward-facing face of a box, `along_x` from its centre along its x axis.
+
+    Returns None when the box stands on its end (its x axis is the one pointing up).
+    """
+    rot = _rot(quat)
+    k = int(np.argmax(np.abs(rot[2, :])))
+    if k == 0 and along_x != 0.0:
+        return None
+    up = np.sign(rot[2, k]) * rot[:, k] * half[k]
+    return pos + rot[:, 0] * along_x + up
+
+
+def _axis_yaw(vec: np.ndarray) -> float:
+    return float(np.degrees(np.arctan2(vec[1], vec[0])) % 360.0)
+
+
+class _Checker:
+    """Reach (IK) and collision checks against a scratch copy of the scene's state."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        m = scene.model
+        if not hasattr(scene, "_probe_data"):
+            scene._probe_data = mujoco.MjData(m)
+        self.data = scene._probe_data
+        self.data.qpos[:] = scene.data.qpos
+        self.probe_bodies = {m.body(b).id for b in PROBE_BODIES.values()}
+        self.mocap = {k: m.body_mocapid[m.body(b).id] for k, b in PROBE_BODIES.items()}
+        for k, mid in self.mocap.items():
+            self.data.mocap_pos[mid] = park_position(20 + mid) + np.array([0.0, 0.0, 10.0])
+        self.ignore = set()
+        if scene.held is not None:
+            self.ignore.add(scene.body_id(scene.held))
+            self.held_kind = scene.kind_of[scene.held]
+            self.rel_pos, self.rel_quat = scene.held_relpose()
+        self._reach: dict[tuple, bool] = {}
+
+    def reachable(self, tcp: np.ndarray) -> bool:
+        key = tuple(np.round(tcp, 4))
+        if key not in self._reach:
+            self._reach[key] = self.scene.kin.solve(tcp, 0.0) is not None
+        return self._reach[key]
+
+    def free(self, tcp: np.ndarray, yaw_deg: float) -> bool:
+        """Is the open gripper (with a copy of what it holds) collision-free at this pose?"""
+        d, m = self.data, self.scene.model
+        hp, hq = hand_pose(tcp, yaw_deg)
+        d.mocap_pos[self.mocap["empty"]] = hp
+        d.mocap_quat[self.mocap["empty"]] = hq
+        copy = None
+        if self.scene.held is not None:
+            copy = self.mocap[self.held_kind]
+            cp = np.zeros(3)
+            mujoco.mju_rotVecQuat(cp, self.rel_pos, hq)
+            cq = np.zeros(4)
+            mujoco.mju_mulQuat(cq, hq, self.rel_quat)
+            d.mocap_pos[copy] = hp + cp
+            d.mocap_quat[copy] = cq
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_collision(m, d)
+        hit = False
+        for c in d.contact[: d.ncon]:
+            b1, b2 = m.geom_bodyid[c.geom[0]], m.geom_bodyid[c.geom[1]]
+            p1, p2 = b1 in self.probe_bodies, b2 in self.probe_bodies
+            other = b2 if p1 else b1
+            if p1 != p2 and other not in self.ignore and c.dist < 0:
+                hit = True
+                break
+        d.mocap_pos[self.mocap["empty"]] = park_position(30) + np.array([0.0, 0.0, 10.0])
+        if copy is not None:
+            d.mocap_pos[copy] = park_position(31) + np.array([0.0, 0.0, 10.0])
+        return not hit
+
+
+def detect(scene) -> list[Affordance]:
+    """The ground-truth affordance list of the scene's current state (paper III.B)."""
+    check = _Checker(scene)
+    found: list[Affordance] = []
+
+    def consider(kind: str, point: np.ndarray, tcp: np.ndarray, angles, symmetric: bool) -> None:
+        if not check.reachable(tcp):
+            return
+        for angle in angles:
+            angle = float(angle % 360.0)
+            if check.free(tcp, angle):
+                found.append(Affordance(kind, tuple(float(v) for v in point), angle, bool(symmetric)))
+
+    objects = [o for o in scene.objects() if not o.held]
+    if scene.held is None:
+        for o in objects:
+            if o.kind in ("cup", "ball"):
+                axis = o.up_axis
+                upright = o.kind == "ball" or abs(axis[2]) > UPRIGHT_COS
+                base = 0.0 if upright else _axis_yaw(axis)
+                consider("grasp", o.pos, o.pos, [base + q for q in QUARTER_TURNS], upright)
+            elif o.kind == "block":
+                # Fingers close across the block's width: the angle follows its long axis.
+                angle = (_axis_yaw(_rot(o.quat)[:, 0]) + 90.0) % 180.0
+                n = len(found)
+                consider("grasp", o.pos, o.pos, [angle], False)
+                if len(found) > n:
+                    found.append(Affordance("turn", tuple(float(v) for v in o.pos), angle, False))
+    else:
+        held_kind = scene.kind_of[scene.held]
+        symmetric = held_kind == "ball" or (held_kind == "cup" and abs(_rot(check.rel_quat)[2, 2]) > UPRIGHT_COS)
+        lift = np.array([0.0, 0.0, scene.held_drop + MOTION.place_clearance])
+        for o in objects:
+            if o.kind == "support":
+                points = [_top_point(o.pos, o.quat, SUPPORT.half)]
+            elif o.kind == "block" and held_kind != "block":
+                points = [_top_point(o.pos, o.quat, BLOCK.half, dx) for dx in BLOCK.place_offsets]
+            else:
+                continue
+            for p in points:
+                if p is not None:
+                    consider("place", p, p + lift, QUARTER_TURNS, symmetric)
+    return found

@@ -1,0 +1,176 @@
+"""Every physical constant of the tabletop, in one place (metres, kilograms, degrees).
+
+The world frame: the table top is z = 0, the robot base stands at the origin and faces +y,
+the work area lies in front of it. The top-down camera looks along -z with image "up" = +y,
+so the robot appears at the bottom of every state image.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class UR3:
+    """UR3 Denavit-Hartenberg parameters (Universal Robots' published values)."""
+
+    d1: float = 0.1519
+    a2: float = -0.24365
+    a3: float = -0.21325
+    d4: float = 0.11235
+    d5: float = 0.08535
+    d6: float = 0.0819
+    joint_limit: float = 2 * np.pi  # every UR3 joint turns +-360 degrees
+
+
+@dataclass(frozen=True)
+class Gripper:
+    """A parallel-jaw gripper on the UR3 flange; the TCP lies on the tool axis."""
+
+    coupling: float = 0.03  # flange -> palm
+    palm_half: tuple[float, float, float] = (0.055, 0.02, 0.015)
+    finger_half: tuple[float, float, float] = (0.006, 0.012, 0.03)
+    open_half_width: float = 0.046  # finger centre from the tool axis when open
+    tcp_above_tip: float = 0.01
+    # Extra clearance demanded around the open gripper when checking an affordance's
+    # commencement pose: a neighbour closer than this blocks the pose (paper III.B).
+    check_clearance: float = 0.004
+
+    @property
+    def palm_z(self) -> float:
+        """Palm centre along the tool axis, from the flange."""
+        return self.coupling + self.palm_half[2]
+
+    @property
+    def finger_z(self) -> float:
+        return self.coupling + 2 * self.palm_half[2] + self.finger_half[2]
+
+    @property
+    def tcp_depth(self) -> float:
+        """Flange -> TCP along the tool axis."""
+        return self.coupling + 2 * self.palm_half[2] + 2 * self.finger_half[2] - self.tcp_above_tip
+
+
+@dataclass(frozen=True)
+class Cup:
+    radius: float = 0.033
+    height: float = 0.075
+    wall: float = 0.004
+    base: float = 0.006
+    n_wall: int = 12
+    mass: float = 0.07
+    rgba: tuple[float, float, float, float] = (0.15, 0.35, 0.95, 1.0)
+
+
+@dataclass(frozen=True)
+class Ball:
+    radius: float = 0.025
+    mass: float = 0.08
+    rgba: tuple[float, float, float, float] = (0.95, 0.15, 0.1, 1.0)
+    # Small rolling friction lets a ball come to rest on the flat table but still roll
+    # down the block when it lies at a slope (DESIGN.md: MuJoCo notes).
+    rolling_friction: float = 0.0004
+
+
+@dataclass(frozen=True)
+class Support:
+    half: tuple[float, float, float] = (0.025, 0.025, 0.03)  # 6 cm tall: a ball fits beneath an overhang
+    mass: float = 0.6
+    rgba: tuple[float, float, float, float] = (0.05, 0.05, 0.05, 1.0)
+
+
+@dataclass(frozen=True)
+class Block:
+    half: tuple[float, float, float] = (0.14, 0.03, 0.02)  # the paper's long side: 28 cm
+    mass: float = 0.15
+    rgba: tuple[float, float, float, float] = (0.95, 0.75, 0.1, 1.0)
+    place_offsets: tuple[float, ...] = (-0.09, 0.0, 0.09)  # the 3 place points along its length
+
+
+@dataclass(frozen=True)
+class Camera:
+    """The top-down camera (the authors': perspective, fov 50 degrees)."""
+
+    pos: tuple[float, float, float] = (0.0, 0.27, 0.70)
+    fovy: float = 50.0
+    size: int = 128
+    # Depth channel = (distance along the optical axis - near) / (far - near), clipped to [0, 1].
+    near: float = 0.15
+    far: float = 0.75
+
+
+@dataclass(frozen=True)
+class Table:
+    # The table top covers the whole camera view, so an object that leaves the table has
+    # left the view too; whatever falls off is parked out of the scene (see Scene).
+    half: tuple[float, float] = (0.335, 0.335)
+    centre: tuple[float, float] = (0.0, 0.27)
+    thickness: float = 0.04
+    off_table_z: float = -0.05  # an object whose centre drops below this has fallen off
+    floor_z: float = -0.8
+
+
+@dataclass(frozen=True)
+class WorkArea:
+    """Where random scenes put objects: in front of the robot and within its reach."""
+
+    x: tuple[float, float] = (-0.20, 0.20)
+    y: tuple[float, float] = (0.16, 0.40)
+
+
+@dataclass(frozen=True)
+class Physics:
+    timestep: float = 0.002
+    friction: tuple[float, float, float] = (0.8, 0.005, 0.0001)
+    weld_solref: tuple[float, float] = (0.005, 1.0)  # stiff enough that a held block does not lag
+    settle_max_steps: int = 1500  # hard cap: 3 s simulated
+    settle_check_every: int = 25
+    settle_lin_vel: float = 0.004
+    settle_ang_vel: float = 0.05
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Timing of the arm's moves (seconds simulated) and its waypoints."""
+
+    hover: float = 0.12  # approach from this far above the target
+    carry_height: float = 0.28  # TCP height when travelling with the gripper down
+    place_clearance: float = 0.008  # a placed object is released this far above the surface
+    turn_lift: float = 0.012
+    t_travel: float = 0.45
+    t_approach: float = 0.25
+    t_close: float = 0.06
+    t_turn: float = 0.45
+    # Default pose (paper III.A): gripper pointing up, a held object visible above it.
+    home_tcp: tuple[float, float, float] = (0.0, 0.12, 0.30)
+    grasp_radius: float = 0.03  # an object centre this close to the TCP is what a grasp holds
+
+
+@dataclass(frozen=True)
+class Limits:
+    """How many of each object a scene can hold (paper III.A)."""
+
+    cups: int = 3
+    balls: int = 3
+    supports: int = 2
+    blocks: int = 1
+
+
+UR3_DH = UR3()
+GRIPPER = Gripper()
+CUP = Cup()
+BALL = Ball()
+SUPPORT = Support()
+BLOCK = Block()
+CAMERA = Camera()
+TABLE = Table()
+WORK_AREA = WorkArea()
+PHYSICS = Physics()
+MOTION = Motion()
+LIMITS = Limits()
+
+KINDS = ("cup", "ball", "support", "block")
+GRASPABLE = ("cup", "ball", "block")
+PARK_Z = 2.0  # objects not in the scene float here (gravity cancelled), far from the view

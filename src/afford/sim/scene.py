@@ -1,0 +1,407 @@
+"""The simulated tabletop: one MuJoCo model, its state, and the objects in it.
+
+A `Scene` is the whole simulator a user drives: put objects on the table (`reset`), look
+(`observe`), list what can be done (`affordances`), do it (`execute`), and go back in time
+(`snapshot` / `restore`). Affordance detection and execution live in their own modules;
+this one owns the state.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from afford.sim import camera as cam
+from afford.sim.constants import (
+    PARK_Z,
+    BALL,
+    BLOCK,
+    CUP,
+    LIMITS,
+    MOTION,
+    PHYSICS,
+    SUPPORT,
+    TABLE,
+)
+from afford.sim.kinematics import ArmKinematics
+from afford.sim.mjcf import ARM_JOINTS, FINGER_JOINTS, build_mjcf, park_position, slot_names
+
+REST_HALF_HEIGHT = {"cup": CUP.height / 2, "ball": BALL.radius, "support": SUPPORT.half[2], "block": BLOCK.half[2]}
+SCENE_FORMAT = 1
+
+
+class SceneError(ValueError):
+    """A scene description that cannot be loaded; the message names the problem."""
+
+
+@dataclass
+class ObjectSpec:
+    """One object of a scene description: its kind and pose (quaternion w, x, y, z)."""
+
+    kind: str
+    pos: tuple[float, float, float]
+    quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+
+    @staticmethod
+    def upright(kind: str, x: float, y: float, yaw_deg: float = 0.0, z: float = 0.0) -> ObjectSpec:
+        """An object standing on a surface at height z (0 = the table top)."""
+        half = np.radians(yaw_deg) / 2
+        return ObjectSpec(kind, (x, y, z + REST_HALF_HEIGHT[kind]), (np.cos(half), 0.0, 0.0, np.sin(half)))
+
+
+@dataclass
+class ObjectState:
+    """An object's true state: what the success predicates and the evaluation read."""
+
+    name: str
+    kind: str
+    pos: np.ndarray
+    quat: np.ndarray
+    present: bool  # False once it has left the table (and so the view)
+    held: bool = False
+
+    @property
+    def up_axis(self) -> np.ndarray:
+        """The object's own z axis in the world (a cup's opening direction)."""
+        m = np.zeros(9)
+        mujoco.mju_quat2Mat(m, self.quat)
+        return m.reshape(3, 3)[:, 2]
+
+    @property
+    def yaw_deg(self) -> float:
+        m = np.zeros(9)
+        mujoco.mju_quat2Mat(m, self.quat)
+        x = m.reshape(3, 3)[:, 0]
+        return float(np.degrees(np.arctan2(x[1], x[0])))
+
+
+@dataclass
+class Snapshot:
+    """The full simulator state: restoring it and doing the same thing gives the same result."""
+
+    physics: np.ndarray
+    eq_data: np.ndarray
+    held: str | None
+    held_drop: float
+    extra: dict = field(default_factory=dict)
+
+
+class Scene:
+    """The tabletop simulator. Build once, then `reset` to any arrangement of objects."""
+
+    _STATE_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION
+
+    def __init__(self):
+        self.model = mujoco.MjModel.from_xml_string(build_mjcf())
+        self.data = mujoco.MjData(self.model)
+        self.kin = ArmKinematics(self.model)
+        self.slots = slot_names()
+        self.kind_of = dict(self.slots)
+        self._qadr = {n: self.model.joint(n).qposadr[0] for n, _ in self.slots}
+        self._vadr = {n: self.model.joint(n).dofadr[0] for n, _ in self.slots}
+        self._body = {n: self.model.body(n).id for n, _ in self.slots}
+        self._zadr = np.array([self._qadr[n] + 2 for n, _ in self.slots])
+        self._weld = {n: self.model.equality(f"hold_{n}").id for n, k in self.slots if k != "support"}
+        self.arm_qadr = self.kin.qpos_adr
+        self.arm_vadr = self.kin.dof_adr
+        self.finger_qadr = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
+        self.finger_vadr = np.array([self.model.joint(j).dofadr[0] for j in FINGER_JOINTS])
+        # The arm's and fingers' joints are consecutive in qpos/qvel: slices are cheap to write.
+        self._arm_slice = slice(self.arm_qadr[0], self.arm_qadr[-1] + 1)
+        self._arm_vslice = slice(self.arm_vadr[0], self.arm_vadr[-1] + 1)
+        self._finger_slice = slice(self.finger_qadr[0], self.finger_qadr[-1] + 1)
+        self._finger_vslice = slice(self.finger_vadr[0], self.finger_vadr[-1] + 1)
+        assert np.all(np.diff(self.arm_qadr) == 1) and np.all(np.diff(self.finger_qadr) == 1)
+        self._finger_open = self.model.jnt_range[self.model.joint("finger_l").id][1]
+        self.home_q = self.kin.home(np.array(MOTION.home_tcp))
+        self.held: str | None = None
+        self.held_drop = 0.0  # TCP height above the held object's lowest point, gripper down
+        self.steps = 0  # physics steps taken, for benchmarks
+        self._camera: cam.RGBDCamera | None = None
+        self._eq_data0 = self.model.eq_data.copy()
+        self.reset([])
+
+    # ------------------------------------------------------------------ set-up
+    def reset(self, objects: list[ObjectSpec], settle: bool = True) -> None:
+        """Empty gripper at the default pose, `objects` on the table, every other slot parked."""
+        counts = {k: 0 for k in ("cup", "ball", "support", "block")}
+        limits = {"cup": LIMITS.cups, "ball": LIMITS.balls, "support": LIMITS.supports, "block": LIMITS.blocks}
+        assigned: dict[str, ObjectSpec] = {}
+        for spec in objects:
+            if spec.kind not in counts:
+                raise SceneError(f"unknown object kind {spec.kind!r}; expected one of {sorted(counts)}")
+            if counts[spec.kind] >= limits[spec.kind]:
+                raise SceneError(f"too many {spec.kind}s: a scene holds at most {limits[spec.kind]}")
+            assigned[f"{spec.kind}{counts[spec.kind]}"] = spec
+            counts[spec.kind] += 1
+        mujoco.mj_resetData(self.model, self.data)
+        self.model.eq_data[:] = self._eq_data0
+        self.data.eq_active[:] = False
+        self.held, self.held_drop = None, 0.0
+        self.set_arm(self.home_q, fingers=1.0)
+        for index, (name, kind) in enumerate(self.slots):
+            if name in assigned:
+                spec = assigned[name]
+                q = np.asarray(spec.quat, dtype=float)
+                self._set_pose(name, np.asarray(spec.pos, dtype=float), q / np.linalg.norm(q))
+            else:
+                self._park(name, index)
+        mujoco.mj_forward(self.model, self.data)
+        if settle:
+            self.settle()
+
+    def _set_pose(self, name: str, pos: np.ndarray, quat: np.ndarray) -> None:
+        self.data.xfrc_applied[self._body[name]] = 0.0
+        a, v = self._qadr[name], self._vadr[name]
+        self.data.qpos[a : a + 3] = pos
+        self.data.qpos[a + 3 : a + 7] = quat
+        self.data.qvel[v : v + 6] = 0.0
+
+    def _park(self, name: str, index: int | None = None) -> None:
+        """Take an object out of the scene: it floats, gravity cancelled, far from everything."""
+        if index is None:
+            index = [n for n, _ in self.slots].index(name)
+        self._set_pose(name, park_position(index), np.array([1.0, 0.0, 0.0, 0.0]))
+        body = self._body[name]
+        self.data.xfrc_applied[body, 2] = -self.model.opt.gravity[2] * self.model.body_mass[body]
+
+    def set_arm(self, q: np.ndarray, fingers: float, dq: np.ndarray | None = None) -> None:
+        """Pose the kinematic arm: joints q, fingers opened to a fraction of their range."""
+        d = self.data
+        d.qpos[self._arm_slice] = q
+        d.qvel[self._arm_vslice] = 0.0 if dq is None else dq
+        d.qpos[self._finger_slice] = fingers * self._finger_open
+        d.qvel[self._finger_vslice] = 0.0
+
+    # ------------------------------------------------------------------ state
+    def object(self, name: str) -> ObjectState:
+        a = self._qadr[name]
+        pos = self.data.qpos[a : a + 3].copy()
+        return ObjectState(
+            name=name,
+            kind=self.kind_of[name],
+            pos=pos,
+            quat=self.data.qpos[a + 3 : a + 7].copy(),
+            present=bool(TABLE.off_table_z < pos[2] < PARK_Z - 1.0),
+            held=name == self.held,
+        )
+
+    def objects(self, present_only: bool = True) -> list[ObjectState]:
+        states = [self.object(n) for n, _ in self.slots]
+        return [s for s in states if s.present or not present_only]
+
+    def body_id(self, name: str) -> int:
+        return self._body[name]
+
+    def slot_of_body(self, body: int) -> str | None:
+        for name, b in self._body.items():
+            if b == body:
+                return name
+        return None
+
+    # ------------------------------------------------------------------ physics
+    def step(self, n: int = 1) -> None:
+        """Advance n physics steps, parking whatever has fallen off the table."""
+        for _ in range(n):
+            mujoco.mj_step(self.model, self.data)
+        self.steps += n
+        self._park_fallen()
+
+    def _park_fallen(self) -> None:
+        z = self.data.qpos[self._zadr]
+        if np.any(z < TABLE.off_table_z):
+            for index, (name, _) in enumerate(self.slots):
+                if self.data.qpos[self._qadr[name] + 2] < TABLE.off_table_z:
+                    self._park(name, index)
+
+    def moving(self) -> bool:
+        for name, _ in self.slots:
+            v = self._vadr[name]
+            a = self._qadr[name]
+            if not TABLE.off_table_z < self.data.qpos[a + 2] < PARK_Z - 1.0 or name == self.held:
+                continue
+            if np.linalg.norm(self.data.qvel[v : v + 3]) > PHYSICS.settle_lin_vel:
+                return True
+            if np.linalg.norm(self.data.qvel[v + 3 : v + 6]) > PHYSICS.settle_ang_vel:
+                return True
+        return False
+
+    def settle(self) -> int:
+        """Step until every object on the table rests, at most `settle_max_steps`. Returns steps taken."""
+        taken = 0
+        while taken < PHYSICS.settle_max_steps:
+            self.step(PHYSICS.settle_check_every)
+            taken += PHYSICS.settle_check_every
+            if not self.moving():
+                break
+        return taken
+
+    # ------------------------------------------------------------------ holding
+    def attach(self, name: str) -> None:
+        """Weld `name` to the hand where it is now (a grasp)."""
+        hand = self.model.body("hand").id
+        hp, hq = self.data.xpos[hand], self.data.xquat[hand]
+        body = self._body[name]
+        op, oq = self.data.xpos[body], self.data.xquat[body]
+        inv = np.zeros(4)
+        mujoco.mju_negQuat(inv, hq)
+        rel_pos = np.zeros(3)
+        mujoco.mju_rotVecQuat(rel_pos, op - hp, inv)
+        rel_quat = np.zeros(4)
+        mujoco.mju_mulQuat(rel_quat, inv, oq)
+        eq = self._weld[name]
+        self.model.eq_data[eq, 3:6] = rel_pos
+        self.model.eq_data[eq, 6:10] = rel_quat
+        self.data.eq_active[eq] = True
+        self.held = name
+        tcp_z = self.data.site_xpos[self.model.site("tcp").id][2]
+        self.held_drop = float(tcp_z - self.lowest_point(name))
+
+    def release(self) -> None:
+        if self.held is not None:
+            self.data.eq_active[self._weld[self.held]] = False
+        self.held = None
+        self.held_drop = 0.0
+
+    def held_relpose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The held object's pose in the hand frame (position, quaternion)."""
+        eq = self._weld[self.held]
+        return self.model.eq_data[eq, 3:6].copy(), self.model.eq_data[eq, 6:10].copy()
+
+    def lowest_point(self, name: str) -> float:
+        """World z of the lowest point of an object's geoms (boxes, cylinders, spheres)."""
+        body = self._body[name]
+        low = np.inf
+        for g in range(self.model.body_geomadr[body], self.model.body_geomadr[body] + self.model.body_geomnum[body]):
+            size = self.model.geom_size[g]
+            rot = self.data.geom_xmat[g].reshape(3, 3)
+            gtype = self.model.geom_type[g]
+            if gtype == mujoco.mjtGeom.mjGEOM_SPHERE:
+                reach = size[0]
+            elif gtype == mujoco.mjtGeom.mjGEOM_BOX:
+                reach = np.abs(rot[2, :]) @ size
+            else:  # cylinder: radius in the plane of the disc, half-height along its axis
+                reach = size[0] * np.sqrt(max(0.0, 1 - rot[2, 2] ** 2)) + size[1] * abs(rot[2, 2])
+            low = min(low, self.data.geom_xpos[g][2] - reach)
+        return float(low)
+
+    # ------------------------------------------------------------------ snapshots
+    def snapshot(self) -> Snapshot:
+        size = mujoco.mj_stateSize(self.model, self._STATE_SPEC)
+        state = np.zeros(size)
+        mujoco.mj_getState(self.model, self.data, state, self._STATE_SPEC)
+        return Snapshot(state, self.model.eq_data.copy(), self.held, self.held_drop)
+
+    def restore(self, snap: Snapshot) -> None:
+        mujoco.mj_setState(self.model, self.data, snap.physics, self._STATE_SPEC)
+        self.model.eq_data[:] = snap.eq_data
+        self.held, self.held_drop = snap.held, snap.held_drop
+        mujoco.mj_forward(self.model, self.data)
+
+    # ------------------------------------------------------------------ observing
+    def observe(self) -> np.ndarray:
+        """The state image: (128, 128, 4) float32 RGBD, every channel in [0, 1]."""
+        if self._camera is None:
+            self._camera = cam.RGBDCamera(self.model)
+        return self._camera.render(self.data)
+
+    def affordances(self):
+        """The ground-truth affordance list of the current state (paper III.B)."""
+        from afford.sim.affordances import detect
+
+        return detect(self)
+
+    def execute(self, affordance):
+        """Carry out an affordance with the arm, return to the default pose, let things settle."""
+        from afford.sim.motion import execute
+
+        return execute(self, affordance)
+
+    def close(self) -> None:
+        if self._camera is not None:
+            self._camera.close()
+            self._camera = None
+
+    def __enter__(self) -> Scene:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ JSON
+    def specs(self) -> list[ObjectSpec]:
+        """The objects on the table now, as a scene description."""
+        return [
+            ObjectSpec(s.kind, tuple(round(float(v), 5) for v in s.pos), tuple(round(float(v), 6) for v in s.quat))
+            for s in self.objects()
+            if not s.held
+        ]
+
+
+def specs_to_json(specs: list[ObjectSpec]) -> dict:
+    return {
+        "format": SCENE_FORMAT,
+        "objects": [{"kind": s.kind, "pos": list(s.pos), "quat": list(s.quat)} for s in specs],
+    }
+
+
+def specs_from_json(obj: object, where: str = "scene") -> list[ObjectSpec]:
+    """Parse a scene description; every mistake raises SceneError naming the field."""
+    if not isinstance(obj, dict):
+        raise SceneError(f"{where}: expected a JSON object with an 'objects' list")
+    if obj.get("format", SCENE_FORMAT) != SCENE_FORMAT:
+        raise SceneError(f"{where}.format: unknown scene format {obj.get('format')!r} (this version reads {SCENE_FORMAT})")
+    items = obj.get("objects")
+    if not isinstance(items, list):
+        raise SceneError(f"{where}.objects: expected a list of objects")
+    specs = []
+    for i, item in enumerate(items):
+        at = f"{where}.objects[{i}]"
+        if not isinstance(item, dict):
+            raise SceneError(f"{at}: expected an object with 'kind' and 'pos'")
+        kind = item.get("kind")
+        if kind not in REST_HALF_HEIGHT:
+            raise SceneError(f"{at}.kind: {kind!r} is not one of {sorted(REST_HALF_HEIGHT)}")
+        pos = _vector(item.get("pos"), 3, f"{at}.pos")
+        if "quat" in item and "yaw" in item:
+            raise SceneError(f"{at}: give either 'quat' or 'yaw', not both")
+        if "yaw" in item:
+            yaw = _vector([item["yaw"]], 1, f"{at}.yaw")[0]
+            half = np.radians(yaw) / 2
+            quat = (float(np.cos(half)), 0.0, 0.0, float(np.sin(half)))
+        else:
+            quat = _vector(item.get("quat", [1, 0, 0, 0]), 4, f"{at}.quat")
+            if np.linalg.norm(quat) < 1e-6:
+                raise SceneError(f"{at}.quat: a quaternion cannot be zero")
+        specs.append(ObjectSpec(kind, pos, quat))
+    return specs
+
+
+def _vector(value: object, n: int, where: str) -> tuple[float, ...]:
+    if not isinstance(value, list | tuple) or len(value) != n:
+        raise SceneError(f"{where}: expected a list of {n} numbers")
+    out = []
+    for v in value:
+        if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
+            raise SceneError(f"{where}: expected a list of {n} numbers, got {value!r}")
+        out.append(float(v))
+    return tuple(out)
+
+
+def load_scene_file(path: str | Path) -> list[ObjectSpec]:
+    p = Path(path)
+    if not p.is_file():
+        raise SceneError(f"{p}: no such scene file")
+    try:
+        obj = json.loads(p.read_text())
+    except json.JSONDecodeError as e:
+        raise SceneError(f"{p}: not valid JSON ({e.msg} at line {e.lineno})") from None
+    return specs_from_json(obj, where=p.name)
+
+
+def save_scene_file(path: str | Path, specs: list[ObjectSpec]) -> None:
+    Path(path).write_text(json.dumps(specs_to_json(specs), indent=2) + "\n")

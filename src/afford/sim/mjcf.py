@@ -64,15 +64,15 @@ def _rx(angle: float) -> str:
     return _v([np.cos(angle / 2), np.sin(angle / 2), 0.0, 0.0])
 
 
-def _cup_geoms(attrs: str, rgba=CUP.rgba, with_mass: bool = True) -> str:
+def _cup_geoms(attrs: str, rgba=CUP.rgba, with_mass: bool = True, inflate: float = 0.0) -> str:
     """A hollow cup: a base disc and a ring of wall slabs, centred on the body origin."""
-    r, h, w, n = CUP.radius, CUP.height, CUP.wall, CUP.n_wall
+    r, h, w, n = CUP.radius + inflate, CUP.height + 2 * inflate, CUP.wall + 2 * inflate, CUP.n_wall
     base_mass = 0.4 * CUP.mass
     wall_mass = 0.6 * CUP.mass / n
     m_base = f' mass="{base_mass:.5g}"' if with_mass else ""
     m_wall = f' mass="{wall_mass:.5g}"' if with_mass else ""
     out = [
-        f'<geom type="cylinder" size="{r:.5g} {CUP.base / 2:.5g}" pos="0 0 {-h / 2 + CUP.base / 2:.5g}"'
+        f'<geom type="cylinder" size="{r:.5g} {CUP.base / 2 + inflate:.5g}" pos="0 0 {-h / 2 + CUP.base / 2 + inflate:.5g}"'
         f' rgba="{_v(rgba)}"{m_base} {attrs}/>'
     ]
     slab = r * np.tan(np.pi / n) * 1.08  # a little overlap closes the ring
@@ -90,14 +90,15 @@ def _cup_geoms(attrs: str, rgba=CUP.rgba, with_mass: bool = True) -> str:
     return "\n".join(out)
 
 
-def _object_geoms(kind: str, attrs: str, with_mass: bool = True) -> str:
+def _object_geoms(kind: str, attrs: str, with_mass: bool = True, inflate: float = 0.0) -> str:
+    """An object's geoms; `inflate` grows them (probe copies demand clearance, paper III.B)."""
     if kind == "cup":
-        return _cup_geoms(attrs, with_mass=with_mass)
+        return _cup_geoms(attrs, with_mass=with_mass, inflate=inflate)
     if kind == "ball":
         mass = f' mass="{BALL.mass}"' if with_mass else ""
         fr = f"{PHYSICS.friction[0]} {PHYSICS.friction[1]} {BALL.rolling_friction}"
         return (
-            f'<geom type="sphere" size="{BALL.radius}" rgba="{_v(BALL.rgba)}" condim="6"'
+            f'<geom type="sphere" size="{BALL.radius + inflate:.5g}" rgba="{_v(BALL.rgba)}" condim="6"'
             f' friction="{fr}"{mass} {attrs}/>'
         )
     if kind == "support":
@@ -105,7 +106,7 @@ def _object_geoms(kind: str, attrs: str, with_mass: bool = True) -> str:
         return f'<geom type="box" size="{_v(SUPPORT.half)}" rgba="{_v(SUPPORT.rgba)}"{mass} {attrs}/>'
     if kind == "block":
         mass = f' mass="{BLOCK.mass}"' if with_mass else ""
-        return f'<geom type="box" size="{_v(BLOCK.half)}" rgba="{_v(BLOCK.rgba)}"{mass} {attrs}/>'
+        return f'<geom type="box" size="{_v(np.add(BLOCK.half, inflate))}" rgba="{_v(BLOCK.rgba)}"{mass} {attrs}/>'
     raise ValueError(f"unknown object kind {kind!r}; expected one of cup, ball, support, block")
 
 
@@ -197,7 +198,7 @@ def build_mjcf() -> str:
     for k, kind in enumerate(("cup", "ball", "block")):
         probes.append(
             f'<body name="copy_{kind}" mocap="true" pos="5 {1 + k} 1">\n'
-            f"{_object_geoms(kind, _PROBE, with_mass=False)}\n</body>"
+            f"{_object_geoms(kind, _PROBE, with_mass=False, inflate=GRIPPER.check_clearance)}\n</body>"
         )
     cx, cy, cz = CAMERA.pos
     return f"""<mujoco model="afford_tabletop">

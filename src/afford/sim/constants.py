@@ -32,7 +32,7 @@ class Gripper:
     coupling: float = 0.03  # flange -> palm
     palm_half: tuple[float, float, float] = (0.055, 0.02, 0.015)
     finger_half: tuple[float, float, float] = (0.006, 0.012, 0.03)
-    open_half_width: float = 0.046  # finger centre from the tool axis when open
+    open_half_width: float = 0.05  # finger centre from the tool axis when open
     tcp_above_tip: float = 0.01
     # Extra clearance demanded around the open gripper when checking an affordance's
     # commencement pose: a neighbour closer than this blocks the pose (paper III.B).
@@ -55,19 +55,26 @@ class Gripper:
 
 @dataclass(frozen=True)
 class Cup:
-    radius: float = 0.033
-    height: float = 0.075
+    radius: float = 0.035  # at the rim
+    bottom_radius: float = 0.026  # the walls taper: the turning block meets a cup high up
+    height: float = 0.085
     wall: float = 0.004
     base: float = 0.006
+    # The cup stands on a foot narrower than its rim, as many cups do; a low push from the
+    # turning block then tips it over instead of sliding it along the table.
+    foot_radius: float = 0.022
     n_wall: int = 12
     mass: float = 0.07
     rgba: tuple[float, float, float, float] = (0.15, 0.35, 0.95, 1.0)
+    # Rubbery: a cup pushed low on its wall by the turning block tips over rather than slides.
+    friction: float = 1.2
+    base_mass_fraction: float = 0.25  # the rest is in the walls: a high centre of mass tips easily
 
 
 @dataclass(frozen=True)
 class Ball:
     radius: float = 0.025
-    mass: float = 0.08
+    mass: float = 0.1  # heavier than a cup: a ball counterbalances a cup on the block (task 4)
     rgba: tuple[float, float, float, float] = (0.95, 0.15, 0.1, 1.0)
     # Small rolling friction lets a ball come to rest on the flat table but still roll
     # down the block when it lies at a slope (DESIGN.md: MuJoCo notes).
@@ -83,8 +90,11 @@ class Support:
 
 @dataclass(frozen=True)
 class Block:
-    half: tuple[float, float, float] = (0.14, 0.03, 0.02)  # the paper's long side: 28 cm
+    half: tuple[float, float, float] = (0.14, 0.03, 0.025)  # the paper's long side: 28 cm
     mass: float = 0.15
+    # Smooth paint: an object on the block slides off once the block tilts past ~20 degrees.
+    # The block's contacts take this value (geom priority), whatever touches it.
+    friction: float = 0.35
     rgba: tuple[float, float, float, float] = (0.95, 0.75, 0.1, 1.0)
     place_offsets: tuple[float, ...] = (-0.09, 0.0, 0.09)  # the 3 place points along its length
 
@@ -137,12 +147,12 @@ class Motion:
 
     hover: float = 0.12  # approach from this far above the target
     carry_height: float = 0.28  # TCP height when travelling with the gripper down
-    place_clearance: float = 0.008  # a placed object is released this far above the surface
+    place_clearance: float = 0.005  # a placed object is released this far above the surface
     turn_lift: float = 0.012
     t_travel: float = 0.45
     t_approach: float = 0.25
     t_close: float = 0.06
-    t_turn: float = 0.45
+    t_turn: float = 0.7  # slow enough that a cup on the smooth block turns with it
     # Default pose (paper III.A): gripper pointing up, a held object visible above it.
     home_tcp: tuple[float, float, float] = (0.0, 0.12, 0.30)
     grasp_radius: float = 0.03  # an object centre this close to the TCP is what a grasp holds

@@ -65,27 +65,36 @@ def _rx(angle: float) -> str:
 
 
 def _cup_geoms(attrs: str, rgba=CUP.rgba, with_mass: bool = True, inflate: float = 0.0) -> str:
-    """A hollow cup: a base disc and a ring of wall slabs, centred on the body origin."""
-    r, h, w, n = CUP.radius + inflate, CUP.height + 2 * inflate, CUP.wall + 2 * inflate, CUP.n_wall
-    base_mass = 0.4 * CUP.mass
-    wall_mass = 0.6 * CUP.mass / n
-    m_base = f' mass="{base_mass:.5g}"' if with_mass else ""
-    m_wall = f' mass="{wall_mass:.5g}"' if with_mass else ""
+    """A hollow, tapered cup: a foot disc and a ring of wall slabs leaning outwards.
+
+    The body origin is the cup's centre (mid-height on its axis): the point a grasp targets.
+    Walls stand on the foot rather than reaching the table, so an upright cup touches the
+    table with one geom, not thirteen: contacts are most of the cost of a physics step.
+    """
+    h, n = CUP.height + 2 * inflate, CUP.n_wall
+    w = CUP.wall + 2 * inflate
+    r_top, r_bot = CUP.radius + inflate, CUP.bottom_radius + inflate
+    fr = f' friction="{CUP.friction} {PHYSICS.friction[1]} {PHYSICS.friction[2]}"'
+    m_base = f' mass="{CUP.base_mass_fraction * CUP.mass:.5g}"{fr}' if with_mass else ""
+    m_wall = f' mass="{(1 - CUP.base_mass_fraction) * CUP.mass / n:.5g}"{fr}' if with_mass else ""
     out = [
-        f'<geom type="cylinder" size="{r:.5g} {CUP.base / 2 + inflate:.5g}" pos="0 0 {-h / 2 + CUP.base / 2 + inflate:.5g}"'
-        f' rgba="{_v(rgba)}"{m_base} {attrs}/>'
+        f'<geom type="cylinder" size="{CUP.foot_radius + inflate:.5g} {CUP.base / 2 + inflate:.5g}"'
+        f' pos="0 0 {-h / 2 + CUP.base / 2 + inflate:.5g}" rgba="{_v(rgba)}"{m_base} {attrs}/>'
     ]
-    slab = r * np.tan(np.pi / n) * 1.08  # a little overlap closes the ring
-    # Walls stand on the base rather than reaching the table, so an upright cup touches the
-    # table with one geom, not thirteen: contacts are most of the cost of a physics step.
-    wall_half = (h - CUP.base) / 2
+    wall_h = h - CUP.base
+    lean = np.arctan2(r_top - r_bot, wall_h)
+    r_mid = (r_top + r_bot) / 2 - w / 2
+    slab = r_top * np.tan(np.pi / n) * 1.08  # a little overlap closes the ring
     for k in range(n):
         a = 2 * np.pi * k / n
-        c = r - w / 2
+        # Turn to the slab's direction about z, then lean its top outwards about its own y.
+        qz = np.array([np.cos(a / 2), 0.0, 0.0, np.sin(a / 2)])
+        quat = np.array([qz[0] * np.cos(lean / 2), -qz[3] * np.sin(lean / 2), qz[0] * np.sin(lean / 2),
+                         qz[3] * np.cos(lean / 2)])
         out.append(
-            f'<geom type="box" size="{w / 2:.5g} {slab:.5g} {wall_half:.5g}"'
-            f' pos="{c * np.cos(a):.5g} {c * np.sin(a):.5g} {CUP.base / 2:.5g}"'
-            f' euler="0 0 {a:.6g}" rgba="{_v(rgba)}"{m_wall} {attrs}/>'
+            f'<geom type="box" size="{w / 2:.5g} {slab:.5g} {wall_h / 2 / np.cos(lean):.5g}"'
+            f' pos="{r_mid * np.cos(a):.5g} {r_mid * np.sin(a):.5g} {CUP.base / 2:.5g}" quat="{_v(quat)}"'
+            f' rgba="{_v(rgba)}"{m_wall} {attrs}/>'
         )
     return "\n".join(out)
 
@@ -106,7 +115,11 @@ def _object_geoms(kind: str, attrs: str, with_mass: bool = True, inflate: float 
         return f'<geom type="box" size="{_v(SUPPORT.half)}" rgba="{_v(SUPPORT.rgba)}"{mass} {attrs}/>'
     if kind == "block":
         mass = f' mass="{BLOCK.mass}"' if with_mass else ""
-        return f'<geom type="box" size="{_v(np.add(BLOCK.half, inflate))}" rgba="{_v(BLOCK.rgba)}"{mass} {attrs}/>'
+        fr = f"{BLOCK.friction} {PHYSICS.friction[1]} {PHYSICS.friction[2]}"
+        return (
+            f'<geom type="box" size="{_v(np.add(BLOCK.half, inflate))}" rgba="{_v(BLOCK.rgba)}" priority="1"'
+            f' friction="{fr}"{mass} {attrs}/>'
+        )
     raise ValueError(f"unknown object kind {kind!r}; expected one of cup, ball, support, block")
 
 

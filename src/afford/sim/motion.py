@@ -57,6 +57,35 @@ class _Arm:
             s.step()
         self.fingers = f_to
 
+    def line(self, tcp_to: np.ndarray, yaw: float, duration: float, waypoints: int = 6) -> bool:
+        """Move the TCP along a straight line (an approach or a lift) through IK waypoints.
+
+        Joint-space interpolation between two distant poses can swing the TCP sideways near
+        the table, dragging a held object through its neighbours; a chain of nearby IK
+        solutions keeps the path straight. Returns False (without moving) if a waypoint is
+        out of reach.
+        """
+        s = self.scene
+        tcp_from = s.data.site_xpos[s.model.site("tcp").id].copy()
+        qs = [self.q]
+        for k in range(1, waypoints + 1):
+            q = s.kin.solve(tcp_from + (tcp_to - tcp_from) * k / waypoints, yaw, seed=qs[-1])
+            if q is None:
+                return False
+            q[5] = qs[-1][5] + (q[5] - qs[-1][5] + np.pi) % (2 * np.pi) - np.pi
+            qs.append(q)
+        path = np.array(qs)
+        n = max(1, round(duration / PHYSICS.timestep))
+        for i in range(1, n + 1):
+            t = i / n
+            u = t * t * (3 - 2 * t) * waypoints
+            du = 6 * t * (1 - t) * waypoints / (n * PHYSICS.timestep)
+            k = min(int(u), waypoints - 1)
+            seg = path[k + 1] - path[k]
+            s.set_arm(path[k] + (u - k) * seg, self.fingers, dq=du * seg)
+            s.step()
+        return True
+
 
 def _nearest_graspable(scene, tcp: np.ndarray) -> str | None:
     best, best_d = None, MOTION.grasp_radius
@@ -102,7 +131,8 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
     if scene.held is not None:
         arm.fingers = _finger_fraction(scene.kind_of[scene.held])
     arm.move(q_high, MOTION.t_travel)
-    arm.move(q_at, MOTION.t_approach)
+    if not arm.line(tcp, aff.angle, MOTION.t_approach):
+        arm.move(q_at, MOTION.t_approach)
     message = ""
     if aff.type == "place":
         scene.release()
@@ -130,10 +160,11 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
                 arm.move(q_down, MOTION.t_close)
             scene.release()
             arm.move(arm.q, MOTION.t_close, fingers=1.0)
-            q_high = scene.kin.solve(high, aff.angle + aff.turn, seed=arm.q)
-            if q_high is None:
-                q_high = arm.q
-    arm.move(q_high, MOTION.t_approach)
+    up = scene.data.site_xpos[scene.model.site("tcp").id].copy()
+    up[2] = high[2]
+    yaw_now = scene.kin.yaw_of(scene.data.site_xmat[scene.model.site("tcp").id].reshape(3, 3))
+    if not arm.line(up, yaw_now, MOTION.t_approach):
+        arm.move(q_high, MOTION.t_approach)
     arm.move(scene.home_q, MOTION.t_travel)
     scene.settle()
     return ExecutionResult(aff, True, scene.held, scene.steps - start, message)

@@ -1,0 +1,80 @@
+"""Scenes by seed, snapshots, JSON, and the camera model."""
+
+import json
+
+import mujoco
+import numpy as np
+import pytest
+
+from afford.sim.affordances import parametrise
+from afford.sim.camera import pixel_to_world, world_to_pixel
+from afford.sim.layout import random_layout
+from afford.sim.scene import ObjectSpec as O
+from afford.sim.scene import SceneError, specs_from_json, specs_to_json
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_scene_compiles_steps_and_executes_without_warnings(scene, seed):
+    rng = np.random.default_rng(seed)
+    scene.reset(random_layout(rng))
+    for _ in range(2):
+        affs = parametrise(scene.affordances())
+        if not affs:
+            break
+        scene.execute(affs[int(rng.integers(len(affs)))])
+    warnings = {mujoco.mjtWarning(i).name: int(scene.data.warning[i].number) for i in range(len(scene.data.warning))}
+    assert not any(warnings.values()), warnings
+    image = scene.observe()
+    assert image.shape == (128, 128, 4) and image.dtype == np.float32
+    assert 0.0 <= image.min() and image.max() <= 1.0
+
+
+def test_random_layout_is_deterministic():
+    a = random_layout(np.random.default_rng(5))
+    b = random_layout(np.random.default_rng(5))
+    assert a == b and len([s for s in a if s.kind == "block"]) == 1
+
+
+def test_snapshot_restore_gives_identical_execution(scene):
+    scene.reset([O.upright("block", 0, 0.30), O.upright("ball", 0.09, 0.30, z=0.05), O.upright("cup", 0.1, 0.375)])
+    snap = scene.snapshot()
+    turn = [a for a in scene.affordances() if a.type == "turn"][0].with_turn(90)
+    results = []
+    for _ in range(2):
+        scene.restore(snap)
+        scene.execute(turn)
+        results.append(np.concatenate([np.concatenate([o.pos, o.quat]) for o in scene.objects(present_only=False)]))
+    np.testing.assert_array_equal(results[0], results[1])
+
+
+def test_json_round_trip_and_errors(scene, tmp_path):
+    scene.reset([O.upright("block", 0, 0.30, 20), O.upright("cup", 0.1, 0.2)])
+    specs = scene.specs()
+    again = specs_from_json(json.loads(json.dumps(specs_to_json(specs))))
+    assert [s.kind for s in again] == [s.kind for s in specs]
+    np.testing.assert_allclose([s.pos for s in again], [s.pos for s in specs])
+    for bad, field in [
+        ({"objects": [{"kind": "mug", "pos": [0, 0, 0]}]}, "objects[0].kind"),
+        ({"objects": [{"kind": "cup", "pos": [0, 0]}]}, "objects[0].pos"),
+        ({"objects": [{"kind": "cup", "pos": [0, 0, 0], "quat": [0, 0, 0, 0]}]}, "objects[0].quat"),
+        ({"objects": "cup"}, "objects"),
+        ([], "scene"),
+    ]:
+        with pytest.raises(SceneError, match=field.replace("[", r"\[").replace("]", r"\]")):
+            specs_from_json(bad)
+    with pytest.raises(SceneError, match="at most 3"):
+        scene.reset([O.upright("cup", 0.1 * i - 0.2, 0.2) for i in range(4)])
+
+
+def test_pixel_world_round_trip_and_projection_of_a_ball(scene):
+    pts = np.array([[0.1, 0.2, 0.0], [-0.15, 0.4, 0.08]])
+    px = world_to_pixel(pts)
+    depth = (0.70 - pts[:, 2] - 0.15) / (0.75 - 0.15)
+    np.testing.assert_allclose(pixel_to_world(px, depth), pts, atol=1e-9)
+    scene.reset([O.upright("ball", 0.12, 0.22), O.upright("block", -0.05, 0.35)])
+    image = scene.observe()
+    col, row = world_to_pixel(scene.object("ball0").pos).astype(int)
+    assert image[row, col, 0] > 0.7 and image[row, col, 1] < 0.3  # red where the ball projects
+    top = scene.object("ball0").pos + [0, 0, 0.025]
+    z = pixel_to_world(np.array([col + 0.5, row + 0.5]), image[row, col, 3])[2]
+    assert abs(z - top[2]) < 0.005  # depth reads the ball's top

@@ -15,7 +15,9 @@ BLOCK_TOP_ON_SUPPORT = SUPPORT_TOP + 2 * BLOCK.half[2]
 
 def find(affs: list[Affordance], kind: str, near, angle: float | None = None) -> Affordance:
     """The affordance of `kind` closest to point `near` (x, y), optionally at `angle`."""
-    cands = [a for a in affs if a.type == kind and (angle is None or abs((a.angle - angle + 180) % 360 - 180) < 1)]
+    cands = [
+        a for a in affs if a.type == kind and (angle is None or abs((a.angle - angle + 180) % 360 - 180) < 1)
+    ]
     if not cands:
         raise AssertionError(f"no {kind} affordance in {affs}")
     return min(cands, key=lambda a: np.hypot(a.position[0] - near[0], a.position[1] - near[1]))

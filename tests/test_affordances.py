@@ -13,7 +13,9 @@ def at(affs, x, y, tol=0.01):
 
 
 def test_empty_gripper_has_no_place_and_holding_has_no_grasp_or_turn(scene):
-    scene.reset([O.upright("support", 0.12, 0.38), O.upright("cup", -0.1, 0.22), O.upright("block", 0, 0.30, 90)])
+    scene.reset(
+        [O.upright("support", 0.12, 0.38), O.upright("cup", -0.1, 0.22), O.upright("block", 0, 0.30, 90)]
+    )
     types = {a.type for a in scene.affordances()}
     assert types == {"grasp", "turn"}
     do(scene, "grasp", (-0.1, 0.22))
@@ -21,7 +23,9 @@ def test_empty_gripper_has_no_place_and_holding_has_no_grasp_or_turn(scene):
 
 
 def test_symmetric_objects_get_quarter_turns_and_block_one_angle(scene):
-    scene.reset([O.upright("cup", -0.1, 0.22), O.upright("ball", 0.12, 0.22), O.upright("block", 0, 0.40, 30)])
+    scene.reset(
+        [O.upright("cup", -0.1, 0.22), O.upright("ball", 0.12, 0.22), O.upright("block", 0, 0.40, 30)]
+    )
     affs = scene.affordances()
     for x, y in ((-0.1, 0.22), (0.12, 0.22)):
         grasps = at(affs, x, y)
@@ -34,8 +38,14 @@ def test_symmetric_objects_get_quarter_turns_and_block_one_angle(scene):
 
 def test_boxed_in_object_loses_colliding_grasp_angles(scene):
     gap = BALL.radius + CUP.radius + 0.01
-    scene.reset([O.upright("ball", 0, 0.28), O.upright("cup", -gap, 0.28), O.upright("cup", gap, 0.28),
-                 O.upright("block", 0, 0.42)])
+    scene.reset(
+        [
+            O.upright("ball", 0, 0.28),
+            O.upright("cup", -gap, 0.28),
+            O.upright("cup", gap, 0.28),
+            O.upright("block", 0, 0.42),
+        ]
+    )
     angles = sorted(a.angle for a in at(scene.affordances(), 0, 0.28) if a.type == "grasp")
     assert angles == [90.0, 270.0]  # fingers opening along x would hit the cups
 
@@ -47,8 +57,14 @@ def test_out_of_reach_object_has_no_affordance(scene):
 
 
 def test_place_needs_free_space(scene):
-    scene.reset([O.upright("support", 0.12, 0.38), O.upright("cup", 0.12, 0.38, z=0.06), O.upright("ball", -0.1, 0.22),
-                 O.upright("block", 0, 0.28, 0)])
+    scene.reset(
+        [
+            O.upright("support", 0.12, 0.38),
+            O.upright("cup", 0.12, 0.38, z=0.06),
+            O.upright("ball", -0.1, 0.22),
+            O.upright("block", 0, 0.28, 0),
+        ]
+    )
     do(scene, "grasp", (-0.1, 0.22))
     places = [a for a in scene.affordances() if a.type == "place"]
     assert at(places, 0.12, 0.38) == []  # the cup occupies the support

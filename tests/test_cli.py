@@ -6,7 +6,9 @@ import sys
 
 
 def afford(*args):
-    return subprocess.run([sys.executable, "-m", "afford.cli.main", *args], capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "afford.cli.main", *args], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_scene_picture_and_json(tmp_path):

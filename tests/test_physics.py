@@ -70,7 +70,9 @@ def test_f_place_on_overhang_tips_block_and_object_falls(scene):
 
 
 def test_g_counterbalance_makes_same_place_stable(scene):
-    block_on_support(scene, -0.02, [O.upright("cup", 0.1, 0.2), O.upright("ball", -0.09, 0.30, z=BLOCK_TOP_ON_SUPPORT)])
+    block_on_support(
+        scene, -0.02, [O.upright("cup", 0.1, 0.2), O.upright("ball", -0.09, 0.30, z=BLOCK_TOP_ON_SUPPORT)]
+    )
     do(scene, "grasp", (0.1, 0.2))
     do(scene, "place", (0.09, 0.30))
     cup, block = scene.object("cup0"), scene.object("block0")
@@ -80,8 +82,13 @@ def test_g_counterbalance_makes_same_place_stable(scene):
 
 def test_h_ball_placed_on_sloped_block_rolls_away(scene):
     pitch = -np.arctan2(SUPPORT_TOP, 2 * (0.14 - 0.02))
-    scene.reset([O.upright("support", 0.12, 0.30), O("block", (0, 0.30, SUPPORT_TOP / 2 + 0.024), _yaw_quat(0, pitch)),
-                 O.upright("ball", -0.1, 0.2)])
+    scene.reset(
+        [
+            O.upright("support", 0.12, 0.30),
+            O("block", (0, 0.30, SUPPORT_TOP / 2 + 0.024), _yaw_quat(0, pitch)),
+            O.upright("ball", -0.1, 0.2),
+        ]
+    )
     assert scene.object("block0").up_axis[2] < 0.995  # the block lies at a slope
     do(scene, "grasp", (-0.1, 0.2))
     place = find(scene.affordances(), "place", (0.09, 0.30))
@@ -101,12 +108,16 @@ def test_i_block_overhang_hides_ball(scene):
     do(scene, "place", (0, 0.34), angle=90)  # keeps the block along x, over the ball
     assert scene.object("ball0").present
     assert red_pixels(scene.observe()) == 0
-    assert not any(a.type == "grasp" and np.hypot(a.position[0] - 0.09, a.position[1] - 0.34) < 0.02
-                   for a in scene.affordances())  # the block above leaves no room for the gripper
+    assert not any(
+        a.type == "grasp" and np.hypot(a.position[0] - 0.09, a.position[1] - 0.34) < 0.02
+        for a in scene.affordances()
+    )  # the block above leaves no room for the gripper
 
 
 def test_canonical_grasp_then_place_moves_object_to_place_point(scene):
-    scene.reset([O.upright("support", 0.12, 0.38), O.upright("cup", -0.1, 0.22), O.upright("block", 0, 0.30, 90)])
+    scene.reset(
+        [O.upright("support", 0.12, 0.38), O.upright("cup", -0.1, 0.22), O.upright("block", 0, 0.30, 90)]
+    )
     do(scene, "grasp", (-0.1, 0.22))
     assert scene.held == "cup0"
     do(scene, "place", (0.12, 0.38))

@@ -22,7 +22,9 @@ def test_random_scene_compiles_steps_and_executes_without_warnings(scene, seed):
         if not affs:
             break
         scene.execute(affs[int(rng.integers(len(affs)))])
-    warnings = {mujoco.mjtWarning(i).name: int(scene.data.warning[i].number) for i in range(len(scene.data.warning))}
+    warnings = {
+        mujoco.mjtWarning(i).name: int(scene.data.warning[i].number) for i in range(len(scene.data.warning))
+    }
     assert not any(warnings.values()), warnings
     image = scene.observe()
     assert image.shape == (128, 128, 4) and image.dtype == np.float32
@@ -36,14 +38,18 @@ def test_random_layout_is_deterministic():
 
 
 def test_snapshot_restore_gives_identical_execution(scene):
-    scene.reset([O.upright("block", 0, 0.30), O.upright("ball", 0.09, 0.30, z=0.05), O.upright("cup", 0.1, 0.375)])
+    scene.reset(
+        [O.upright("block", 0, 0.30), O.upright("ball", 0.09, 0.30, z=0.05), O.upright("cup", 0.1, 0.375)]
+    )
     snap = scene.snapshot()
     turn = [a for a in scene.affordances() if a.type == "turn"][0].with_turn(90)
     results = []
     for _ in range(2):
         scene.restore(snap)
         scene.execute(turn)
-        results.append(np.concatenate([np.concatenate([o.pos, o.quat]) for o in scene.objects(present_only=False)]))
+        results.append(
+            np.concatenate([np.concatenate([o.pos, o.quat]) for o in scene.objects(present_only=False)])
+        )
     np.testing.assert_array_equal(results[0], results[1])
 
 

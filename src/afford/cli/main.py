@@ -39,15 +39,29 @@ def cmd_scene(args) -> int:
         save_scene_file(args.save, scene.specs())
     if args.json:
         objects = [
-            {"name": o.name, "kind": o.kind, "pos": [round(float(v), 5) for v in o.pos],
-             "quat": [round(float(v), 6) for v in o.quat]}
+            {
+                "name": o.name,
+                "kind": o.kind,
+                "pos": [round(float(v), 5) for v in o.pos],
+                "quat": [round(float(v), 6) for v in o.quat],
+            }
             for o in scene.objects()
         ]
-        print(json.dumps({"objects": objects, "affordances": [a.to_dict() for a in affs],
-                          "scene": specs_to_json(scene.specs())}, indent=2))
+        print(
+            json.dumps(
+                {
+                    "objects": objects,
+                    "affordances": [a.to_dict() for a in affs],
+                    "scene": specs_to_json(scene.specs()),
+                },
+                indent=2,
+            )
+        )
     else:
-        print(f"{len(scene.objects())} objects, {len(affs)} affordances"
-              + (f"; picture: {args.out}" if args.out else ""))
+        print(
+            f"{len(scene.objects())} objects, {len(affs)} affordances"
+            + (f"; picture: {args.out}" if args.out else "")
+        )
         for a in affs:
             p = ", ".join(f"{v:+.3f}" for v in a.position)
             print(f"  {a.type:5s} at ({p}) angle {a.angle:5.1f}{' symmetric' if a.symmetric else ''}")
@@ -70,8 +84,12 @@ def cmd_demo(args) -> int:
             panels.append(label(to_pil(image), "final" if affs else "final (no affordances)"))
             break
         a = affs[int(rng.integers(len(affs)))]
-        panels.append(label(draw_affordances(to_pil(image), [a]), f"{step}: {a.type}"
-                            + (f" {a.turn:+d}" if a.type == "turn" else "")))
+        panels.append(
+            label(
+                draw_affordances(to_pil(image), [a]),
+                f"{step}: {a.type}" + (f" {a.turn:+d}" if a.type == "turn" else ""),
+            )
+        )
         scene.execute(a)
         print(f"step {step}: {a.type} at ({', '.join(f'{v:+.3f}' for v in a.position)}) angle {a.angle:.0f}")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
@@ -84,14 +102,17 @@ def cmd_demo(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="afford",
-        description="Plan action sequences by recognising affordances in predicted futures (MuJoCo tabletop).",
+        description="Plan action sequences by recognising affordances in predicted futures.",
     )
     sub = p.add_subparsers(dest="command", required=True)
 
-    s = sub.add_parser("scene", help="render a scene and list its ground-truth affordances",
-                       description="Render a random scene (by seed) or a saved one, and list its affordances. "
-                       "Writes RGB | depth | affordance overlay (markers with gripper-angle lines: white where the "
-                       "angle matters, black where the affordance is symmetric; green grasp, cyan place, magenta turn).")
+    s = sub.add_parser(
+        "scene",
+        help="render a scene and list its ground-truth affordances",
+        description="Render a random scene (by seed) or a saved one, and list its affordances. "
+        "Writes RGB | depth | affordance overlay (markers with gripper-angle lines: white where the "
+        "angle matters, black where the affordance is symmetric; green grasp, cyan place, magenta turn).",
+    )
     s.add_argument("--seed", type=int, default=0, help="random scene seed (ignored with --load)")
     s.add_argument("--load", metavar="SCENE.json", help="load a saved scene instead of a random one")
     s.add_argument("--save", metavar="SCENE.json", help="save the (settled) scene as JSON")
@@ -99,9 +120,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print objects and affordances as JSON")
     s.set_defaults(func=cmd_scene)
 
-    d = sub.add_parser("demo", help="execute random affordances in a random scene and draw the states",
-                       description="Make a random scene, execute a few affordances drawn from its ground-truth "
-                       "list, and write a strip of the states with each executed affordance drawn.")
+    d = sub.add_parser(
+        "demo",
+        help="execute random affordances in a random scene and draw the states",
+        description="Make a random scene, execute a few affordances drawn from its ground-truth "
+        "list, and write a strip of the states with each executed affordance drawn.",
+    )
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--load", metavar="SCENE.json", help="start from a saved scene")
     d.add_argument("--steps", type=int, default=4, help="number of affordances to execute")

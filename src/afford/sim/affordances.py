@@ -58,8 +58,13 @@ class Affordance:
 
     @staticmethod
     def from_dict(d: dict) -> Affordance:
-        return Affordance(d["type"], tuple(float(v) for v in d["position"]), float(d["angle"]),
-                          bool(d["symmetric"]), int(d.get("turn", 0)))
+        return Affordance(
+            d["type"],
+            tuple(float(v) for v in d["position"]),
+            float(d["angle"]),
+            bool(d["symmetric"]),
+            int(d.get("turn", 0)),
+        )
 
 
 def parametrise(affordances: list[Affordance]) -> list[Affordance]:
@@ -117,7 +122,7 @@ class _Checker:
         self.data.qpos[:] = scene.data.qpos
         self.probe_bodies = {m.body(b).id for b in PROBE_BODIES.values()}
         self.mocap = {k: m.body_mocapid[m.body(b).id] for k, b in PROBE_BODIES.items()}
-        for k, mid in self.mocap.items():
+        for mid in self.mocap.values():
             self.data.mocap_pos[mid] = park_position(20 + mid) + np.array([0.0, 0.0, 10.0])
         self.ignore = set()
         if scene.held is not None:
@@ -193,7 +198,9 @@ def detect(scene) -> list[Affordance]:
                     found.append(Affordance("turn", tuple(float(v) for v in o.pos), angle, False))
     else:
         held_kind = scene.kind_of[scene.held]
-        symmetric = held_kind == "ball" or (held_kind == "cup" and abs(_rot(check.rel_quat)[2, 2]) > UPRIGHT_COS)
+        symmetric = held_kind == "ball" or (
+            held_kind == "cup" and abs(_rot(check.rel_quat)[2, 2]) > UPRIGHT_COS
+        )
         lift = np.array([0.0, 0.0, scene.held_drop + MOTION.place_clearance])
         for o in objects:
             if o.kind == "support":

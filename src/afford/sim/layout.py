@@ -54,7 +54,10 @@ class _Table:
 
     def free(self, circles) -> bool:
         for x, y, r in circles:
-            if not (WORK_AREA.x[0] - 0.05 <= x <= WORK_AREA.x[1] + 0.05 and WORK_AREA.y[0] - 0.03 <= y <= WORK_AREA.y[1] + 0.12):
+            if not (
+                WORK_AREA.x[0] - 0.05 <= x <= WORK_AREA.x[1] + 0.05
+                and WORK_AREA.y[0] - 0.03 <= y <= WORK_AREA.y[1] + 0.12
+            ):
                 return False
             for cx, cy, cr in self.circles:
                 if np.hypot(x - cx, y - cy) < r + cr + self.gap:
@@ -78,8 +81,10 @@ def random_layout(rng: np.random.Generator, config: LayoutConfig = LayoutConfig(
     block_frame = None
 
     def uniform_xy(margin: float = 0.0) -> tuple[float, float]:
-        return (float(rng.uniform(WORK_AREA.x[0] + margin, WORK_AREA.x[1] - margin)),
-                float(rng.uniform(WORK_AREA.y[0] + margin, WORK_AREA.y[1] - margin)))
+        return (
+            float(rng.uniform(WORK_AREA.x[0] + margin, WORK_AREA.x[1] - margin)),
+            float(rng.uniform(WORK_AREA.y[0] + margin, WORK_AREA.y[1] - margin)),
+        )
 
     # The block, with the supports its mode needs.
     for _ in range(config.tries):
@@ -136,8 +141,13 @@ def random_layout(rng: np.random.Generator, config: LayoutConfig = LayoutConfig(
         elif roll < config.p_on_block + config.p_on_support and place_points:
             spot = place_points.pop(int(rng.integers(len(place_points))))
         if spot is not None:
-            specs.append(ObjectSpec(kind, (float(spot[0]), float(spot[1]), float(spot[2] + REST_HALF_HEIGHT[kind])),
-                                    _yaw_quat(float(rng.uniform(0, 2 * np.pi)))))
+            specs.append(
+                ObjectSpec(
+                    kind,
+                    (float(spot[0]), float(spot[1]), float(spot[2] + REST_HALF_HEIGHT[kind])),
+                    _yaw_quat(float(rng.uniform(0, 2 * np.pi))),
+                )
+            )
             continue
         for attempt in range(config.tries):
             if block_frame is not None and attempt == 0 and rng.random() < config.p_beside_block:

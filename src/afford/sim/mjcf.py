@@ -89,8 +89,14 @@ def _cup_geoms(attrs: str, rgba=CUP.rgba, with_mass: bool = True, inflate: float
         a = 2 * np.pi * k / n
         # Turn to the slab's direction about z, then lean its top outwards about its own y.
         qz = np.array([np.cos(a / 2), 0.0, 0.0, np.sin(a / 2)])
-        quat = np.array([qz[0] * np.cos(lean / 2), -qz[3] * np.sin(lean / 2), qz[0] * np.sin(lean / 2),
-                         qz[3] * np.cos(lean / 2)])
+        quat = np.array(
+            [
+                qz[0] * np.cos(lean / 2),
+                -qz[3] * np.sin(lean / 2),
+                qz[0] * np.sin(lean / 2),
+                qz[3] * np.cos(lean / 2),
+            ]
+        )
         out.append(
             f'<geom type="box" size="{w / 2:.5g} {slab:.5g} {wall_h / 2 / np.cos(lean):.5g}"'
             f' pos="{r_mid * np.cos(a):.5g} {r_mid * np.sin(a):.5g} {CUP.base / 2:.5g}" quat="{_v(quat)}"'
@@ -174,7 +180,8 @@ def _arm() -> str:
               <joint name="q6" {joint}/>
               <geom type="cylinder" fromto="0 0 0 0 0 {u.d6:.5g}" size="0.03" mass="0.1" {link}/>
               <body name="hand" pos="0 0 {u.d6:.5g}" gravcomp="1">
-                <geom type="cylinder" fromto="0 0 0 0 0 {g.coupling:.5g}" size="0.028" rgba=".3 .3 .33 1" mass="0.1" {_ROBOT}/>
+                <geom type="cylinder" fromto="0 0 0 0 0 {g.coupling:.5g}" size="0.028" rgba=".3 .3 .33 1"
+                      mass="0.1" {_ROBOT}/>
                 {_gripper_geoms(f'mass="0.1" {_ROBOT}')}
                 <site name="tcp" pos="0 0 {g.tcp_depth:.5g}" size="0.005" rgba="1 0 1 0"/>
                 {fingers}

@@ -17,20 +17,25 @@ import numpy as np
 
 from afford.sim import camera as cam
 from afford.sim.constants import (
-    PARK_Z,
     BALL,
     BLOCK,
     CUP,
     LIMITS,
     MOTION,
+    PARK_Z,
     PHYSICS,
     SUPPORT,
     TABLE,
 )
 from afford.sim.kinematics import ArmKinematics
-from afford.sim.mjcf import ARM_JOINTS, FINGER_JOINTS, build_mjcf, park_position, slot_names
+from afford.sim.mjcf import FINGER_JOINTS, build_mjcf, park_position, slot_names
 
-REST_HALF_HEIGHT = {"cup": CUP.height / 2, "ball": BALL.radius, "support": SUPPORT.half[2], "block": BLOCK.half[2]}
+REST_HALF_HEIGHT = {
+    "cup": CUP.height / 2,
+    "ball": BALL.radius,
+    "support": SUPPORT.half[2],
+    "block": BLOCK.half[2],
+}
 SCENE_FORMAT = 1
 
 
@@ -129,7 +134,12 @@ class Scene:
     def reset(self, objects: list[ObjectSpec], settle: bool = True) -> None:
         """Empty gripper at the default pose, `objects` on the table, every other slot parked."""
         counts = {k: 0 for k in ("cup", "ball", "support", "block")}
-        limits = {"cup": LIMITS.cups, "ball": LIMITS.balls, "support": LIMITS.supports, "block": LIMITS.blocks}
+        limits = {
+            "cup": LIMITS.cups,
+            "ball": LIMITS.balls,
+            "support": LIMITS.supports,
+            "block": LIMITS.blocks,
+        }
         assigned: dict[str, ObjectSpec] = {}
         for spec in objects:
             if spec.kind not in counts:
@@ -143,7 +153,7 @@ class Scene:
         self.data.eq_active[:] = False
         self.held, self.held_drop = None, 0.0
         self.set_arm(self.home_q, fingers=1.0)
-        for index, (name, kind) in enumerate(self.slots):
+        for index, (name, _) in enumerate(self.slots):
             if name in assigned:
                 spec = assigned[name]
                 q = np.asarray(spec.quat, dtype=float)
@@ -276,7 +286,9 @@ class Scene:
         """World z of the lowest point of an object's geoms (boxes, cylinders, spheres)."""
         body = self._body[name]
         low = np.inf
-        for g in range(self.model.body_geomadr[body], self.model.body_geomadr[body] + self.model.body_geomnum[body]):
+        for g in range(
+            self.model.body_geomadr[body], self.model.body_geomadr[body] + self.model.body_geomnum[body]
+        ):
             size = self.model.geom_size[g]
             rot = self.data.geom_xmat[g].reshape(3, 3)
             gtype = self.model.geom_type[g]
@@ -336,7 +348,9 @@ class Scene:
     def specs(self) -> list[ObjectSpec]:
         """The objects on the table now, as a scene description."""
         return [
-            ObjectSpec(s.kind, tuple(round(float(v), 5) for v in s.pos), tuple(round(float(v), 6) for v in s.quat))
+            ObjectSpec(
+                s.kind, tuple(round(float(v), 5) for v in s.pos), tuple(round(float(v), 6) for v in s.quat)
+            )
             for s in self.objects()
             if not s.held
         ]
@@ -354,7 +368,9 @@ def specs_from_json(obj: object, where: str = "scene") -> list[ObjectSpec]:
     if not isinstance(obj, dict):
         raise SceneError(f"{where}: expected a JSON object with an 'objects' list")
     if obj.get("format", SCENE_FORMAT) != SCENE_FORMAT:
-        raise SceneError(f"{where}.format: unknown scene format {obj.get('format')!r} (this version reads {SCENE_FORMAT})")
+        raise SceneError(
+            f"{where}.format: unknown scene format {obj.get('format')!r} (this version reads {SCENE_FORMAT})"
+        )
     items = obj.get("objects")
     if not isinstance(items, list):
         raise SceneError(f"{where}.objects: expected a list of objects")

@@ -27,7 +27,9 @@ def to_pil(image: np.ndarray, scale: int = SCALE) -> Image.Image:
 
 def depth_pil(image: np.ndarray, scale: int = SCALE) -> Image.Image:
     d = np.clip(image[..., 3], 0, 1)
-    pil = Image.fromarray(((1 - d) * 255).astype(np.uint8)).convert("RGB")  # near = bright
+    # Stretched to the image's own range for display: near = bright.
+    near = (d.max() - d) / max(float(d.max() - d.min()), 1e-6)
+    pil = Image.fromarray((near * 255).astype(np.uint8)).convert("RGB")
     return pil.resize((pil.width * scale, pil.height * scale), Image.NEAREST)
 
 
@@ -48,7 +50,13 @@ def draw_affordances(pil: Image.Image, affordances, scale: int = SCALE) -> Image
             sign = 1 if a.turn > 0 else -1
             arc = [col - 3 * r, row - 3 * r, col + 3 * r, row + 3 * r]
             start = -np.degrees(angle)
-            d.arc(arc, start=min(start, start - sign * 90), end=max(start, start - sign * 90), fill=colour, width=2)
+            d.arc(
+                arc,
+                start=min(start, start - sign * 90),
+                end=max(start, start - sign * 90),
+                fill=colour,
+                width=2,
+            )
     return pil
 
 

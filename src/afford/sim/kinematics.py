@@ -23,6 +23,11 @@ READY_SEED = np.array([-np.pi / 2, -1.3, 1.9, -2.2, -np.pi / 2, 0.0])
 HOME_SEED = np.array([np.pi / 2, -1.2, 0.9, -0.9, 1.57, 0.0])
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    # np.cross's argument handling costs more than the product itself in this hot loop.
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 @dataclass(frozen=True)
 class IKConfig:
     max_iterations: int = 120
@@ -81,7 +86,7 @@ class ArmKinematics:
             p = d.site_xpos[self.site]
             axis = d.site_xmat[self.site].reshape(3, 3)[:, 2]
             e_pos = pos - p
-            e_rot = np.cross(axis, target_axis)
+            e_rot = _cross(axis, target_axis)
             if axis @ target_axis < 0:  # more than 90 degrees away: the cross product shrinks
                 e_rot = e_rot / max(np.linalg.norm(e_rot), 1e-6)
             if np.linalg.norm(e_pos) < cfg.pos_tolerance and np.linalg.norm(e_rot) < cfg.axis_tolerance:

@@ -127,7 +127,6 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
         return ExecutionResult(aff, False, scene.held, 0, "out of reach")
 
     arm = _Arm(scene)
-    arm.fingers = 1.0 if scene.held is None else arm.fingers
     if scene.held is not None:
         arm.fingers = _finger_fraction(scene.kind_of[scene.held])
     arm.move(q_high, MOTION.t_travel)

@@ -208,12 +208,6 @@ class Scene:
     def body_id(self, name: str) -> int:
         return self._body[name]
 
-    def slot_of_body(self, body: int) -> str | None:
-        for name, b in self._body.items():
-            if b == body:
-                return name
-        return None
-
     # ------------------------------------------------------------------ physics
     def step(self, n: int = 1) -> None:
         """Advance n physics steps, parking whatever has fallen off the table.

@@ -57,6 +57,7 @@ class RGBDCamera:
     def __init__(self, model: mujoco.MjModel):
         self._renderer = mujoco.Renderer(model, SIZE, SIZE)
         self._cam = model.camera("top").id
+        self._geom_body = model.geom_bodyid.copy()
 
     def render(self, data: mujoco.MjData) -> np.ndarray:
         r = self._renderer
@@ -68,6 +69,19 @@ class RGBDCamera:
         depth = depth_to_unit(r.render()).astype(np.float32)
         r.disable_depth_rendering()
         return np.concatenate([rgb, depth[..., None]], axis=-1)  # (H, W, 4)
+
+    def segment(self, data: mujoco.MjData) -> np.ndarray:
+        """(H, W) int array: the body id seen at each pixel, -1 where no geom is seen."""
+        r = self._renderer
+        r.enable_segmentation_rendering()
+        r.update_scene(data, self._cam)
+        seg = r.render()
+        r.disable_segmentation_rendering()
+        ids, types = seg[..., 0], seg[..., 1]
+        geom = (types == mujoco.mjtObj.mjOBJ_GEOM) & (ids >= 0)
+        body = np.full(ids.shape, -1, dtype=int)
+        body[geom] = self._geom_body[ids[geom]]
+        return body
 
     def close(self) -> None:
         self._renderer.close()

@@ -284,9 +284,17 @@ class Scene:
         return self.model.eq_data[eq, 3:6].copy(), self.model.eq_data[eq, 6:10].copy()
 
     def lowest_point(self, name: str) -> float:
-        """World z of the lowest point of an object's geoms (boxes, cylinders, spheres)."""
+        """World z of the lowest point of an object's geoms."""
+        return self._z_extent(name)[0]
+
+    def highest_point(self, name: str) -> float:
+        """World z of the highest point of an object's geoms."""
+        return self._z_extent(name)[1]
+
+    def _z_extent(self, name: str) -> tuple[float, float]:
+        """Lowest and highest world z of an object's geoms (boxes, cylinders, spheres)."""
         body = self._body[name]
-        low = np.inf
+        low, high = np.inf, -np.inf
         for g in range(
             self.model.body_geomadr[body], self.model.body_geomadr[body] + self.model.body_geomnum[body]
         ):
@@ -299,8 +307,9 @@ class Scene:
                 reach = np.abs(rot[2, :]) @ size
             else:  # cylinder: radius in the plane of the disc, half-height along its axis
                 reach = size[0] * np.sqrt(max(0.0, 1 - rot[2, 2] ** 2)) + size[1] * abs(rot[2, 2])
-            low = min(low, self.data.geom_xpos[g][2] - reach)
-        return float(low)
+            z = self.data.geom_xpos[g][2]
+            low, high = min(low, z - reach), max(high, z + reach)
+        return float(low), float(high)
 
     # ------------------------------------------------------------------ snapshots
     def snapshot(self) -> Snapshot:
@@ -321,6 +330,12 @@ class Scene:
         if self._camera is None:
             self._camera = cam.RGBDCamera(self.model)
         return self._camera.render(self.data)
+
+    def visible_pixels(self, name: str) -> int:
+        """How many pixels of the state image show the object `name`."""
+        if self._camera is None:
+            self._camera = cam.RGBDCamera(self.model)
+        return int(np.count_nonzero(self._camera.segment(self.data) == self._body[name]))
 
     def affordances(self):
         """The ground-truth affordance list of the current state (paper III.B)."""

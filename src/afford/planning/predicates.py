@@ -79,7 +79,7 @@ class Predicate:
 # ---------------------------------------------------------------------------- evaluation
 def _near(p: Predicate, scene, see: bool) -> bool:
     o = scene.object(p.args["object"])
-    if not o.present:
+    if not o.present or o.held:
         return False
     d = o.pos - np.asarray(p.args["to"])
     if p.args["xy"]:
@@ -95,15 +95,19 @@ def _yaw(p: Predicate, scene, see: bool) -> bool:
 
 
 def _on(p: Predicate, scene, see: bool) -> bool:
-    o = scene.object(p.args["object"])
+    return rests_on(scene, p.args["object"], p.args["host"])
+
+
+def rests_on(scene, name: str, host: str) -> bool:
+    """Does object `name` rest on the top of `host` (a support, the block, or "table")?"""
+    o = scene.object(name)
     if not o.present or o.held:
         return False
     low = scene.lowest_point(o.name)
-    host = p.args["host"]
     if host == "table":
         return bool(low < ON_GAP[1])
     h = scene.object(host)
-    if not h.present or h.held:
+    if not h.present or h.held or h.kind not in HOST_HALF:
         return False
     top = scene.highest_point(host)
     if not ON_GAP[0] <= low - top <= ON_GAP[1]:

@@ -112,8 +112,11 @@ def _object_geoms(kind: str, attrs: str, with_mass: bool = True, inflate: float 
     if kind == "ball":
         mass = f' mass="{BALL.mass}"' if with_mass else ""
         fr = f"{PHYSICS.friction[0]} {PHYSICS.friction[1]} {BALL.rolling_friction}"
+        # Priority above the block's: the ball's rolling friction (condim 6) then governs its
+        # contact with the block too, so a ball placed on the block comes to rest there.
         return (
             f'<geom type="sphere" size="{BALL.radius + inflate:.5g}" rgba="{_v(BALL.rgba)}" condim="6"'
+            f' priority="2"'
             f' friction="{fr}"{mass} {attrs}/>'
         )
     if kind == "support":

@@ -1,0 +1,215 @@
+"""The canonical-symbolic planner: the baseline the paper argues against (eq. (1) style).
+
+Its state is symbolic: where each object is, what it rests on, what the gripper holds. Its
+effects are canonical only:
+
+    grasp(o)       -> o is held (with whatever rests on it)
+    place(o at P)  -> o rests upright at P, on P's host; the gripper is empty
+    turn(b, +-90)  -> the block turns about its centre, with whatever rests on it
+
+Nothing falls, tips, rolls or is pushed. Which affordances exist in a state is read off that
+state's canonical geometry with the ground-truth detector (reach and collision), so the
+planner knows which actions free up which others (what tasks 1 and 2 need) but nothing of
+dynamics. It searches breadth-first for the shortest plan after which the task's success
+predicate holds on the canonical state. A symbolic state has no view: the predicate's
+`hidden` reads as `gone`. The plan is then executed in the simulator, where physics decides.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from afford.planning.predicates import Predicate, rests_on
+from afford.planning.tree import edges
+from afford.sim.affordances import Affordance
+from afford.sim.camera import world_to_pixel
+from afford.sim.constants import MOTION
+from afford.sim.scene import ObjectSpec, Scene
+
+
+@dataclass(frozen=True)
+class Pose:
+    pos: tuple[float, float, float]
+    quat: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class SymbolicState:
+    """What is where: each object's canonical pose and host; what is held and how."""
+
+    poses: tuple[tuple[str, Pose], ...]
+    hosts: tuple[tuple[str, str], ...]  # (object, the object it rests on); table if absent
+    held: str | None = None
+    grasp: tuple[float, float, float, float] | None = None  # grasp point (x, y, z) and angle
+
+    def pose(self, name: str) -> Pose:
+        return dict(self.poses)[name]
+
+    def key(self) -> tuple:
+        """Equal for states a planner should treat as the same (poses to the millimetre)."""
+        rounded = tuple((n, tuple(np.round(p.pos, 3)), tuple(np.round(p.quat, 2))) for n, p in self.poses)
+        return rounded, self.hosts, self.held
+
+
+@dataclass
+class SymbolicResult:
+    plan: tuple[Affordance, ...] | None  # None: no canonical plan within max_steps
+    expanded: int
+    seconds: float
+    predicted: SymbolicState | None = None  # the canonical end state of the plan
+    trace: list[SymbolicState] = field(default_factory=list)
+
+
+def _rot_z(deg: float) -> np.ndarray:
+    a = np.radians(deg)
+    return np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+
+
+def _turn_quat(quat, deg: float) -> tuple[float, ...]:
+    q = np.array([np.cos(np.radians(deg) / 2), 0.0, 0.0, np.sin(np.radians(deg) / 2)])
+    out = np.zeros(4)
+    mujoco.mju_mulQuat(out, q, np.asarray(quat, dtype=float))
+    return tuple(float(v) for v in out)
+
+
+class CanonicalWorld:
+    """Symbolic states, their canonical geometry in a Scene, and the canonical effects."""
+
+    def __init__(self, scene: Scene, specs: list[ObjectSpec], names: list[str]):
+        self.scene = scene
+        self.names = names
+        self.kinds = {n: s.kind for n, s in zip(names, specs, strict=True)}
+        scene.reset(specs)  # the true start, settled: its poses are the symbolic start
+        hosts = []
+        for n in names:
+            for h in names:
+                if h != n and rests_on(scene, n, h):
+                    hosts.append((n, h))
+                    break
+        self.start = SymbolicState(
+            tuple((n, Pose(tuple(scene.object(n).pos), tuple(scene.object(n).quat))) for n in names),
+            tuple(hosts),
+        )
+
+    def realise(self, state: SymbolicState) -> None:
+        """Put the scene in the state's canonical geometry (teleported, not simulated)."""
+        specs = [ObjectSpec(self.kinds[n], p.pos, p.quat) for n, p in state.poses]
+        self.scene.reset(specs, settle=False)
+        if state.held is not None:
+            # Close the hand on the held object where it was grasped, then bring the arm home:
+            # the detector's probe then carries a copy of it as a real grasp would.
+            gx, gy, gz, angle = state.grasp
+            q = self.scene.kin.solve(np.array([gx, gy, gz]), angle)
+            if q is not None:
+                self.scene.set_arm(q, fingers=1.0)
+                mujoco.mj_forward(self.scene.model, self.scene.data)
+            self.scene.attach(state.held)
+            self.scene.set_arm(self.scene.home_q, fingers=1.0)
+            mujoco.mj_forward(self.scene.model, self.scene.data)
+
+    def riders(self, state: SymbolicState, name: str) -> list[str]:
+        """Everything resting on `name`, directly or on something that does."""
+        hosts = dict(state.hosts)
+        out = []
+        for n in self.names:
+            h = hosts.get(n)
+            while h is not None and h != name:
+                h = hosts.get(h)
+            if h == name:
+                out.append(n)
+        return out
+
+    def apply(self, state: SymbolicState, aff: Affordance) -> SymbolicState | None:
+        """The canonical effect of `aff`; None where it acts on nothing."""
+        poses = dict(state.poses)
+        hosts = dict(state.hosts)
+        point = np.asarray(aff.position)
+        if aff.type in ("grasp", "turn"):
+            target = min(
+                (n for n in self.names if self.kinds[n] != "support"),
+                key=lambda n: np.linalg.norm(np.asarray(poses[n].pos) - point),
+            )
+            if np.linalg.norm(np.asarray(poses[target].pos) - point) > MOTION.grasp_radius:
+                return None
+            if aff.type == "grasp":
+                hosts.pop(target, None)
+                return SymbolicState(
+                    state.poses, tuple(hosts.items()), target, (*(float(v) for v in point), aff.angle)
+                )
+            moved = [target, *self.riders(state, target)]
+            centre = np.asarray(poses[target].pos)
+            return self._moved(poses, hosts, moved, centre, centre, aff.turn)
+        # place: the held object (and its riders) turns by the change of gripper angle about the
+        # grasp point, which moves to above P; the object comes to rest on P's host.
+        name = state.held
+        gx, gy, gz, angle = state.grasp
+        self.realise(state)
+        drop = self.scene.held_drop
+        target = point + np.array([0.0, 0.0, drop])
+        host = self._host_at(state, point, name)
+        hosts[name] = host
+        moved = [name, *self.riders(state, name)]
+        return self._moved(poses, hosts, moved, np.array([gx, gy, gz]), target, aff.angle - angle)
+
+    def _moved(self, poses, hosts, moved, pivot, to, turn_deg) -> SymbolicState:
+        """Move `moved` rigidly: turn by `turn_deg` about `pivot`, which goes to `to`. The
+        gripper ends empty (a place or a turn)."""
+        rot = _rot_z(turn_deg)
+        for n in moved:
+            p = poses[n]
+            pos = to + rot @ (np.asarray(p.pos) - pivot)
+            poses[n] = Pose(tuple(float(v) for v in pos), _turn_quat(p.quat, turn_deg))
+        hosts = {k: v for k, v in hosts.items() if v is not None}
+        return SymbolicState(tuple((n, poses[n]) for n in self.names), tuple(sorted(hosts.items())))
+
+    def _host_at(self, state: SymbolicState, point: np.ndarray, held: str) -> str | None:
+        candidates = [n for n in self.names if self.kinds[n] in ("support", "block") and n != held]
+        if not candidates:
+            return None
+        return min(candidates, key=lambda n: np.linalg.norm(np.asarray(state.pose(n).pos)[:2] - point[:2]))
+
+
+def scan_order(affs: list[Affordance]) -> list[Affordance]:
+    """Affordances in image order (row by row, left to right), the order a reader or a
+    grid-cell recogniser meets them; ties keep the detector's order."""
+    return sorted(affs, key=lambda a: tuple(np.floor(world_to_pixel(np.asarray(a.position))[::-1])))
+
+
+def plan_symbolic(
+    scene: Scene, specs: list[ObjectSpec], names: list[str], success: Predicate, max_steps: int
+) -> SymbolicResult:
+    """Breadth-first search over canonical effects for the shortest plan to `success`."""
+    start_time = time.perf_counter()
+    world = CanonicalWorld(scene, specs, names)
+    queue: deque[tuple[SymbolicState, tuple[Affordance, ...], list[SymbolicState]]] = deque(
+        [(world.start, (), [world.start])]
+    )
+    seen = {world.start.key()}
+    expanded = 0
+    world.realise(world.start)
+    if success.holds(scene, see=False):
+        return SymbolicResult((), 0, time.perf_counter() - start_time, world.start, [world.start])
+    while queue:
+        state, plan, trace = queue.popleft()
+        if len(plan) >= max_steps:
+            continue
+        world.realise(state)
+        actions = edges([(a, 1.0) for a in scan_order(scene.affordances())], merge_radius=0.01)
+        expanded += 1
+        for aff in actions:
+            child = world.apply(state, aff)
+            if child is None or child.key() in seen:
+                continue
+            seen.add(child.key())
+            world.realise(child)
+            if success.holds(scene, see=False):
+                return SymbolicResult(
+                    plan + (aff,), expanded, time.perf_counter() - start_time, child, trace + [child]
+                )
+            queue.append((child, plan + (aff,), trace + [child]))
+    return SymbolicResult(None, expanded, time.perf_counter() - start_time)

@@ -99,6 +99,75 @@ def cmd_demo(args) -> int:
     return 0
 
 
+def _outcome_line(o) -> str:
+    plan = "-" if o.plan is None else " > ".join(a.type + (f"{a.turn:+d}" if a.turn else "") for a in o.plan)
+    return f"{'solved' if o.success else 'FAILED'}: {plan}"
+
+
+def cmd_plan(args) -> int:
+    """Plan a task file, execute the plan in the simulator, draw it (paper Fig. 8)."""
+    from afford.planning.run import solve
+    from afford.planning.tasks import load_task
+    from afford.planning.tree import SearchConfig
+    from afford.sim.scene import Scene
+    from afford.viz.plan import plan_strip
+
+    scene = Scene()
+    task = load_task(args.task, scene)
+    outcome = solve(task, args.planner, scene, SearchConfig(progress=not args.json))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    picture = out / f"{task.name}-{args.planner}.png"
+    plan_strip(outcome, task.goal, picture)
+    record = outcome.to_dict() | {"picture": str(picture)}
+    (out / f"{task.name}-{args.planner}.json").write_text(json.dumps(record, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(record, indent=2))
+    else:
+        print(f"{task.name} ({args.planner}) {_outcome_line(outcome)}")
+        print(
+            f"  {outcome.nodes} nodes, {outcome.seconds:.1f} s planning"
+            + (f"; {outcome.reason}" if outcome.reason else "")
+        )
+        print(f"  picture: {picture}")
+    scene.close()
+    return 0 if outcome.success else 1
+
+
+def cmd_bench_tasks(args) -> int:
+    """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
+    from afford.planning.run import solve
+    from afford.planning.tasks import load_task
+    from afford.planning.tree import SearchConfig
+    from afford.sim.scene import Scene
+    from afford.viz.plan import plan_strip
+
+    files = sorted(Path(args.tasks).glob("*.json"))
+    if not files:
+        raise CLIError(f"{args.tasks}: no task files (*.json) there")
+    scene = Scene()
+    rows = []
+    for f in files:
+        task = load_task(f, scene)
+        if not args.json:
+            print(f"{task.name} ...", end="", flush=True)
+        o = solve(task, args.planner, scene, SearchConfig(progress=False))
+        if args.out:
+            plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{args.planner}.png")
+        rows.append(o.to_dict())
+        if not args.json:
+            print(f"\r{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
+            if o.reason:
+                print(f"{'':32s} {o.reason}")
+    solved = sum(r["solved"] for r in rows)
+    if args.json:
+        print(json.dumps({"planner": args.planner, "solved": solved, "tasks": rows}, indent=2))
+    else:
+        print(f"{args.planner}: {solved}/{len(rows)} tasks solved")
+    scene.close()
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="afford",
@@ -131,16 +200,48 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--steps", type=int, default=4, help="number of affordances to execute")
     d.add_argument("--out", default="out/demo.png", metavar="FILE.png")
     d.set_defaults(func=cmd_demo)
+
+    from afford.planning.run import PLANNERS
+
+    pl = sub.add_parser(
+        "plan",
+        help="plan a task file, execute the plan, check the goal",
+        description="Plan a task (a JSON task file, see tasks/paper/) by tree search over affordances, "
+        "execute the plan in the simulator and check the task's success predicate. Planners: oracle (the "
+        "simulator as a perfect world model, paper II.D search), symbolic (canonical effects only, "
+        "breadth-first). Writes a picture like the paper's Fig. 8 and a JSON record. Exit status 1 when "
+        "the executed plan misses the goal.",
+    )
+    pl.add_argument("--task", required=True, metavar="TASK.json")
+    pl.add_argument("--planner", choices=PLANNERS, default="oracle")
+    pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
+    pl.add_argument("--json", action="store_true", help="print the record as JSON")
+    pl.set_defaults(func=cmd_plan)
+
+    b = sub.add_parser("bench", help="benchmarks", description="Benchmarks over a set of tasks.")
+    bsub = b.add_subparsers(dest="bench", required=True)
+    bt = bsub.add_parser(
+        "tasks",
+        help="plan and execute every task of a folder, print a table",
+        description="Plan every task file in a folder with one planner, execute each plan, and print "
+        "solved / plan / plan length / nodes / planning seconds per task.",
+    )
+    bt.add_argument("--planner", choices=PLANNERS, default="oracle")
+    bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
+    bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
+    bt.add_argument("--json", action="store_true")
+    bt.set_defaults(func=cmd_bench_tasks)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
+    from afford.planning.tasks import TaskError
     from afford.sim.scene import SceneError
 
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (CLIError, SceneError) as e:
+    except (CLIError, SceneError, TaskError) as e:
         print(f"afford: error: {e}", file=sys.stderr)
         return 2
 

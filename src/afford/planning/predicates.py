@@ -193,7 +193,9 @@ def parse(obj: object, names: set[str], where: str = "success") -> Predicate:
         if host != "table":
             host = _name(host, names, f"{at}.host")
             if host.rstrip("0123456789") not in HOST_HALF:
-                raise PredicateError(f"{at}.host: {host} cannot hold things; use a support, the block or 'table'")
+                raise PredicateError(
+                    f"{at}.host: {host} cannot hold things; use a support, the block or 'table'"
+                )
         args["host"] = host
     elif op == "inside":
         box = _numbers(arg.get("box"), 4, f"{at}.box")

@@ -111,6 +111,7 @@ class CanonicalWorld:
             self.scene.attach(state.held)
             self.scene.set_arm(self.scene.home_q, fingers=1.0)
             mujoco.mj_forward(self.scene.model, self.scene.data)
+            self.scene.carry_held()
 
     def riders(self, state: SymbolicState, name: str) -> list[str]:
         """Everything resting on `name`, directly or on something that does."""

@@ -91,7 +91,9 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
     if not isinstance(obj, dict):
         raise TaskError(f"{where}: expected a JSON object")
     if obj.get("format", TASK_FORMAT) != TASK_FORMAT:
-        raise TaskError(f"{where}.format: unknown task format {obj.get('format')!r} (this reads {TASK_FORMAT})")
+        raise TaskError(
+            f"{where}.format: unknown task format {obj.get('format')!r} (this reads {TASK_FORMAT})"
+        )
     known = {"format", "name", "challenge", "scene", "goal", "max_steps", "success"}
     unknown = set(obj) - known
     if unknown:
@@ -166,7 +168,9 @@ def _crop(c: object) -> tuple[int, int, int, int]:
         colrow = cam.world_to_pixel(np.asarray(centre, dtype=float))
         w, h = int(wh[0]), int(wh[1])
         box = [int(round(colrow[0] - w / 2)), int(round(colrow[1] - h / 2)), w, h]
-    elif isinstance(c, list) and len(c) == 4 and all(isinstance(v, int) and not isinstance(v, bool) for v in c):
+    elif (
+        isinstance(c, list) and len(c) == 4 and all(isinstance(v, int) and not isinstance(v, bool) for v in c)
+    ):
         box = list(c)
     else:
         raise TaskError("goal.crop: expected [col, row, width, height] in whole pixels or a centre + size")

@@ -113,7 +113,9 @@ def edges(recognised: Recognised, merge_radius: float) -> list[Affordance]:
     return parametrise([a for a, _ in kept])
 
 
-def search(model: WorldModel, goal: Goal, max_steps: int, config: SearchConfig = SearchConfig()) -> SearchResult:
+def search(
+    model: WorldModel, goal: Goal, max_steps: int, config: SearchConfig = SearchConfig()
+) -> SearchResult:
     """Grow the tree breadth-first to `max_steps` and pick the plan for `goal`."""
     start = time.perf_counter()
     image, state = model.root()
@@ -139,7 +141,9 @@ def search(model: WorldModel, goal: Goal, max_steps: int, config: SearchConfig =
             bar.update(len(batch))
         bar.close()
         frontier = []
-        bar = tqdm(total=len(children), desc=f"depth {depth + 1}/{max_steps}: predict", disable=not config.progress)
+        bar = tqdm(
+            total=len(children), desc=f"depth {depth + 1}/{max_steps}: predict", disable=not config.progress
+        )
         for b in range(0, len(children), bs):
             batch = children[b : b + bs]
             made = model.predict([nodes[i] for i, _ in batch], [a for _, a in batch])
@@ -159,7 +163,9 @@ def search(model: WorldModel, goal: Goal, max_steps: int, config: SearchConfig =
         per_depth.append(len(frontier))
         if not frontier:
             break
-    return SearchResult(nodes, choose(nodes, goal, config.tie_tolerance), time.perf_counter() - start, expanded, per_depth)
+    return SearchResult(
+        nodes, choose(nodes, goal, config.tie_tolerance), time.perf_counter() - start, expanded, per_depth
+    )
 
 
 def choose(nodes: list[Node], goal: Goal, tie_tolerance: float) -> int:

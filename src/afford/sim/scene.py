@@ -278,6 +278,18 @@ class Scene:
         self.held = None
         self.held_drop = 0.0
 
+    def carry_held(self) -> None:
+        """Put the held object where its weld says, in the hand (after a kinematic arm move)."""
+        rel_pos, rel_quat = self.held_relpose()
+        hand = self.model.body("hand").id
+        hp, hq = self.data.xpos[hand], self.data.xquat[hand]
+        pos = np.zeros(3)
+        mujoco.mju_rotVecQuat(pos, rel_pos, hq)
+        quat = np.zeros(4)
+        mujoco.mju_mulQuat(quat, hq, rel_quat)
+        self._set_pose(self.held, hp + pos, quat)
+        mujoco.mj_forward(self.model, self.data)
+
     def held_relpose(self) -> tuple[np.ndarray, np.ndarray]:
         """The held object's pose in the hand frame (position, quaternion)."""
         eq = self._weld[self.held]

@@ -28,6 +28,8 @@ lint: install
 
 bench: install
 	$(PY) benchmarks/sim_speed.py
+	$(VENV)/bin/afford bench tasks --planner symbolic
+	$(VENV)/bin/afford bench tasks --planner oracle
 
 clean:
 	rm -rf $(VENV) out

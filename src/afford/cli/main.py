@@ -149,14 +149,15 @@ def cmd_bench_tasks(args) -> int:
     rows = []
     for f in files:
         task = load_task(f, scene)
-        if not args.json:
+        live = not args.json and sys.stdout.isatty()
+        if live:
             print(f"{task.name} ...", end="", flush=True)
         o = solve(task, args.planner, scene, SearchConfig(progress=False))
         if args.out:
             plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{args.planner}.png")
         rows.append(o.to_dict())
         if not args.json:
-            print(f"\r{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
+            print(f"{chr(13) if live else ''}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
             if o.reason:
                 print(f"{'':32s} {o.reason}")
     solved = sum(r["solved"] for r in rows)

@@ -79,3 +79,14 @@ def test_plan_cli_rejects_bad_task_in_one_line(tmp_path):
     bad.write_text(json.dumps({**GOOD, "max_steps": "four"}))
     r = afford("plan", "--task", str(bad))
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "max_steps" in r.stderr
+
+
+def test_bench_tasks_cli_tables_a_folder(tmp_path):
+    (tmp_path / "toy.json").write_text(json.dumps(GOOD))
+    r = afford("bench", "tasks", "--planner", "oracle", "--tasks", str(tmp_path), "--json")
+    assert r.returncode == 0, r.stderr
+    table = json.loads(r.stdout)
+    assert table["solved"] == 1 and table["tasks"][0]["plan_length"] == 2
+    assert table["tasks"][0]["planning_seconds"] >= 0
+    empty = afford("bench", "tasks", "--tasks", str(tmp_path / "none"))
+    assert empty.returncode == 2 and "no task files" in empty.stderr

@@ -157,7 +157,8 @@ def cmd_bench_tasks(args) -> int:
             plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{args.planner}.png")
         rows.append(o.to_dict())
         if not args.json:
-            print(f"{chr(13) if live else ''}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
+            back = "\r" if live else ""
+            print(f"{back}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
             if o.reason:
                 print(f"{'':32s} {o.reason}")
     solved = sum(r["solved"] for r in rows)

@@ -84,6 +84,7 @@ class CanonicalWorld:
         self.scene = scene
         self.names = names
         self.kinds = {n: s.kind for n, s in zip(names, specs, strict=True)}
+        self._drops: dict[tuple, float] = {}
         scene.reset(specs)  # the true start, settled: its poses are the symbolic start
         hosts = []
         for n in names:
@@ -112,6 +113,15 @@ class CanonicalWorld:
             self.scene.set_arm(self.scene.home_q, fingers=1.0)
             mujoco.mj_forward(self.scene.model, self.scene.data)
             self.scene.carry_held()
+
+    def _held_drop(self, state: SymbolicState) -> float:
+        """TCP height above the held object's lowest point; every place edge of a state
+        needs it, so it is measured once per state."""
+        key = state.key()
+        if key not in self._drops:
+            self.realise(state)
+            self._drops[key] = self.scene.held_drop
+        return self._drops[key]
 
     def riders(self, state: SymbolicState, name: str) -> list[str]:
         """Everything resting on `name`, directly or on something that does."""
@@ -149,8 +159,7 @@ class CanonicalWorld:
         # grasp point, which moves to above P; the object comes to rest on P's host.
         name = state.held
         gx, gy, gz, angle = state.grasp
-        self.realise(state)
-        drop = self.scene.held_drop
+        drop = self._held_drop(state)
         target = point + np.array([0.0, 0.0, drop])
         host = self._host_at(state, point, name)
         hosts[name] = host

@@ -24,7 +24,6 @@ lifting an object does not count as removing it (IV.C): "channels": "rgb" does t
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,7 +33,7 @@ from PIL import Image
 from afford.planning.goal import CHANNELS, Goal, GoalError
 from afford.planning.predicates import Predicate, PredicateError, parse
 from afford.sim import camera as cam
-from afford.sim.scene import SceneError, specs_from_json
+from afford.sim.scene import SceneError, read_json_file, specs_from_json
 
 TASK_FORMAT = 1
 MAX_STEPS_LIMIT = 8
@@ -74,12 +73,7 @@ def load_task(path: str | Path, scene=None) -> Task:
     """Read and validate a task file. A goal given as a scene is rendered with `scene` (a
     `Scene`, made here when not given)."""
     p = Path(path)
-    if not p.is_file():
-        raise TaskError(f"{p}: no such task file")
-    try:
-        obj = json.loads(p.read_text())
-    except json.JSONDecodeError as e:
-        raise TaskError(f"{p}: not valid JSON ({e.msg} at line {e.lineno})") from None
+    obj = read_json_file(p, "task", TaskError)
     try:
         return task_from_json(obj, base=p.parent, scene=scene, path=p)
     except (SceneError, PredicateError, GoalError) as e:

@@ -339,15 +339,17 @@ class Scene:
     # ------------------------------------------------------------------ observing
     def observe(self) -> np.ndarray:
         """The state image: (128, 128, 4) float32 RGBD, every channel in [0, 1]."""
-        if self._camera is None:
-            self._camera = cam.RGBDCamera(self.model)
-        return self._camera.render(self.data)
+        return self._cam().render(self.data)
 
     def visible_pixels(self, name: str) -> int:
         """How many pixels of the state image show the object `name`."""
+        return int(np.count_nonzero(self._cam().segment(self.data) == self._body[name]))
+
+    def _cam(self) -> cam.RGBDCamera:
+        """The renderer, made on first use (it needs a GL context)."""
         if self._camera is None:
             self._camera = cam.RGBDCamera(self.model)
-        return int(np.count_nonzero(self._camera.segment(self.data) == self._body[name]))
+        return self._camera
 
     def affordances(self):
         """The ground-truth affordance list of the current state (paper III.B)."""
@@ -436,15 +438,19 @@ def _vector(value: object, n: int, where: str) -> tuple[float, ...]:
     return tuple(out)
 
 
-def load_scene_file(path: str | Path) -> list[ObjectSpec]:
+def read_json_file(path: str | Path, what: str, error: type[ValueError] = SceneError) -> object:
+    """A JSON file's content; a missing or unparsable file raises `error` in one line."""
     p = Path(path)
     if not p.is_file():
-        raise SceneError(f"{p}: no such scene file")
+        raise error(f"{p}: no such {what} file")
     try:
-        obj = json.loads(p.read_text())
+        return json.loads(p.read_text())
     except json.JSONDecodeError as e:
-        raise SceneError(f"{p}: not valid JSON ({e.msg} at line {e.lineno})") from None
-    return specs_from_json(obj, where=p.name)
+        raise error(f"{p}: not valid JSON ({e.msg} at line {e.lineno})") from None
+
+
+def load_scene_file(path: str | Path) -> list[ObjectSpec]:
+    return specs_from_json(read_json_file(path, "scene"), where=Path(path).name)
 
 
 def save_scene_file(path: str | Path, specs: list[ObjectSpec]) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+from PIL import Image, ImageDraw
 
 from afford.viz.draw import SCALE, depth_pil, draw_affordances, hstack, label, to_pil
 
@@ -23,8 +23,6 @@ def goal_panel(patch: np.ndarray, size: int, negative: bool, scale: int = SCALE)
         d = d.resize((d.width // 2, d.height // 2))
         panel.paste(d, (panel.width - d.width - 2, panel.height - d.height - 2))
     if negative:
-        from PIL import ImageDraw
-
         draw = ImageDraw.Draw(panel)
         draw.line([(x, y), (x + p.width, y + p.height)], fill=(255, 0, 0), width=3)
         draw.line([(x, y + p.height), (x + p.width, y)], fill=(255, 0, 0), width=3)

@@ -214,12 +214,14 @@ class Scene:
 
         The check runs every `PARK_CHECK_EVERY` steps: a fallen object is below the table,
         out of view and out of reach of everything else, so parking it a little later
-        changes nothing in the scene.
+        changes nothing in the scene. The phase comes from simulated time, which resets and
+        snapshots carry, so a run never depends on what the Scene simulated before.
         """
+        dt = self.model.opt.timestep
         for _ in range(n):
             mujoco.mj_step(self.model, self.data)
             self.steps += 1
-            if self.steps % PARK_CHECK_EVERY == 0:
+            if round(self.data.time / dt) % PARK_CHECK_EVERY == 0:
                 self._park_fallen()
 
     def _park_fallen(self) -> None:

@@ -2,6 +2,7 @@
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+TORCH  := 2.13.0
 export MUJOCO_GL ?= egl
 
 .PHONY: install demo test lint bench clean
@@ -10,6 +11,8 @@ $(STAMP): pyproject.toml scripts/setup_system.sh
 	bash scripts/setup_system.sh
 	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+	# The CPU build of torch first: a plain resolve may pick a GPU build with gigabytes of CUDA wheels.
+	$(PY) -m pip install -q "torch==$(TORCH)" || $(PY) -m pip install -q "torch==$(TORCH)+cpu"
 	$(PY) -m pip install -q -e '.[dev]'
 	touch $(STAMP)
 

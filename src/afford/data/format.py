@@ -302,3 +302,36 @@ class Dataset:
     def sequences(self, split: str | None = None):
         for i in self.indices(split):
             yield self.sequence(i)
+
+
+def shard_summary(path: Path) -> dict[str, np.ndarray]:
+    """The small arrays of a shard (no images): what `afford data info` counts."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in ("index", "state_count", "aff_count", "affordances", "actions")}
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
+        raise DataError(f"{path}: corrupt shard ({type(e).__name__}: {e})") from None
+
+
+def verify(root: str | Path) -> tuple[list[str], int]:
+    """Read every shard in full (zip CRCs, array consistency, sequence indices).
+
+    Returns (problems, good shard count); a problem is one line naming a shard.
+    """
+    root = Path(root)
+    manifest = read_manifest(root)
+    problems, good = [], 0
+    for k in range(manifest.n_shards):
+        path = shard_path(root, k)
+        if not path.is_file():
+            problems.append(f"{path}: shard missing (re-run the same `afford generate` to make it)")
+            continue
+        try:
+            seqs = read_shard(path, tuple(manifest.slots))
+            if [s.index for s in seqs] != list(manifest.shard_range(k)):
+                raise DataError(f"{path}: corrupt shard (holds the wrong sequences)")
+        except DataError as e:
+            problems.append(str(e))
+            continue
+        good += 1
+    return problems, good

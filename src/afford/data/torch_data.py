@@ -1,0 +1,97 @@
+"""PyTorch datasets over a generated dataset: one for each net.
+
+Recognition (paper II.B) learns from single states and their ground-truth affordance lists;
+prediction (II.C) from runs of 1-4 executions that start at a random state of a sequence.
+Images come out as (4, H, W) float32 in [0, 1]; affordance rows stay in the world frame
+(format.AFF_COLUMNS) and the nets turn them into their own targets.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from torch.utils.data import Dataset as TorchDataset
+
+from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
+from afford.data.format import Dataset
+
+
+def _to_chw(images: np.ndarray) -> torch.Tensor:
+    return torch.from_numpy(np.ascontiguousarray(images.transpose(0, 3, 1, 2)))
+
+
+class RecognitionData(TorchDataset):
+    """(image (4, H, W), affordance rows (n, 7)) for every state of a split."""
+
+    def __init__(self, data: Dataset, split: str, augment_config: AugmentConfig = NO_AUGMENT, seed: int = 0):
+        self.data = data
+        self.items = [(i, t) for i in data.indices(split) for t in range(data.sequence(i).length + 1)]
+        self.config = augment_config
+        self.rng = np.random.default_rng(seed)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __getitem__(self, k: int) -> tuple[torch.Tensor, torch.Tensor]:
+        i, t = self.items[k]
+        seq = self.data.sequence(i)
+        images, (rows,) = augment(seq.image(t)[None], [seq.affordances[t]], self.config, self.rng)
+        return _to_chw(images)[0], torch.from_numpy(rows)
+
+
+def collate_recognition(batch) -> tuple[torch.Tensor, list[torch.Tensor]]:
+    """Images stacked; the affordance lists stay a list (their lengths differ)."""
+    return torch.stack([b[0] for b in batch]), [b[1] for b in batch]
+
+
+class PredictionData(TorchDataset):
+    """A run of L = 1..max_steps executions from a random start state of a sequence.
+
+    Returns images (L+1, 4, H, W) and actions (L, 7). With `random_start` off, every run starts
+    at state 0 and takes as many steps as the sequence has (for evaluation per step).
+    """
+
+    def __init__(
+        self,
+        data: Dataset,
+        split: str,
+        max_steps: int = 4,
+        augment_config: AugmentConfig = NO_AUGMENT,
+        random_start: bool = True,
+        seed: int = 0,
+    ):
+        self.data = data
+        self.indices = [i for i in data.indices(split) if data.sequence(i).length > 0]
+        self.max_steps = max_steps
+        self.config = augment_config
+        self.random_start = random_start
+        self.rng = np.random.default_rng(seed)
+
+    def __len__(self) -> int:
+        return len(self.indices)
+
+    def __getitem__(self, k: int) -> tuple[torch.Tensor, torch.Tensor]:
+        seq = self.data.sequence(self.indices[k])
+        start = int(self.rng.integers(seq.length)) if self.random_start else 0
+        stop = min(seq.length, start + self.max_steps)
+        images = np.stack([seq.image(t) for t in range(start, stop + 1)])
+        images, (actions,) = augment(images, [seq.actions[start:stop]], self.config, self.rng, noisy=[True])
+        return _to_chw(images), torch.from_numpy(actions)
+
+
+def collate_prediction(batch) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Pad runs to the longest: images (B, L+1, 4, H, W), actions (B, L, 7), steps (B,)."""
+    steps = torch.tensor([len(b[1]) for b in batch])
+    longest = int(steps.max())
+    images = torch.zeros((len(batch), longest + 1, *batch[0][0].shape[1:]))
+    actions = torch.zeros((len(batch), longest, 7))
+    for j, (im, act) in enumerate(batch):
+        images[j, : len(im)] = im
+        actions[j, : len(act)] = act
+    return images, actions, steps
+
+
+def worker_init(worker_id: int) -> None:
+    """DataLoader workers: each its own augmentation stream."""
+    info = torch.utils.data.get_worker_info()
+    info.dataset.rng = np.random.default_rng([info.seed % 2**32, worker_id])

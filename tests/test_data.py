@@ -17,8 +17,8 @@ from afford.cli.main import main
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
 from afford.data.format import (
     MANIFEST,
-    Dataset,
     DataError,
+    Dataset,
     decode_affordance,
     encode_affordance,
     shard_path,

@@ -234,21 +234,23 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--json", action="store_true")
     bt.set_defaults(func=cmd_bench_tasks)
 
-    from afford.cli import data
+    from afford.cli import data, nets
 
     data.add_parsers(sub)
+    nets.add_parsers(sub)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     from afford.data.format import DataError
+    from afford.training.checkpoint import CheckpointError
     from afford.planning.tasks import TaskError
     from afford.sim.scene import SceneError
 
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (CLIError, SceneError, TaskError, DataError) as e:
+    except (CLIError, SceneError, TaskError, DataError, CheckpointError) as e:
         print(f"afford: error: {e}", file=sys.stderr)
         return 2
 

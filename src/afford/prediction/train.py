@@ -1,0 +1,99 @@
+"""`afford train prediction`: the EM*D pathway on runs of 1-4 executions (paper II.C)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.utils.data import DataLoader
+
+from afford.data.augment import AugmentConfig
+from afford.data.format import Dataset
+from afford.data.torch_data import PredictionData, collate_prediction
+from afford.prediction.config import PRESETS, PredictionConfig
+from afford.prediction.model import PredictionNet
+from afford.training.loop import Loop, LoopState, run
+from afford.training.signsgd import SignSGD
+
+VAL_RUNS = 128  # validation runs per evaluation
+
+
+def step_mask(steps: torch.Tensor, longest: int) -> torch.Tensor:
+    """(B, L) 1 for the steps each run really has, 0 for padding."""
+    return (torch.arange(longest)[None, :] < steps[:, None]).float()
+
+
+def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor):
+    """Squared error over the channels, mean over pixels, real steps and batch (DESIGN.md)."""
+    predicted = net.rollout(images[:, 0], actions)
+    err = ((predicted - images[:, 1:]) ** 2).sum(2).mean((-2, -1))  # (B, L)
+    mask = step_mask(steps, actions.shape[1])
+    return (err * mask).sum() / mask.sum()
+
+
+def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
+    if config.optimizer == "signsgd":
+        return SignSGD(net.parameters(), lr=config.lr)
+    if config.optimizer == "adam":
+        return torch.optim.Adam(net.parameters(), lr=config.lr)
+    raise ValueError(f"unknown optimizer {config.optimizer!r}; expected signsgd or adam")
+
+
+def train(
+    data_dir: str | Path, config: PredictionConfig, run_dir: str | Path, progress: bool = True
+) -> LoopState:
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(0)
+    data = Dataset(data_dir)
+    augment = AugmentConfig(
+        shift_px=config.shift_px,
+        mirror=config.mirror,
+        angle_flip=config.angle_flip,
+        position_noise=config.position_noise,
+        angle_noise=config.angle_noise,
+    )
+    train_set = PredictionData(data, "train", config.max_steps, augment)
+    val_set = PredictionData(data, "val", config.max_steps, random_start=False)
+    picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
+    val_batch = collate_prediction([val_set[int(i)] for i in picks])
+    loader = DataLoader(
+        train_set, batch_size=config.batch_size, shuffle=True, drop_last=True, collate_fn=collate_prediction
+    )
+    net = PredictionNet(config)
+    opt = make_optimizer(net, config)
+
+    def train_step(batch):
+        loss = sequence_loss(net, *batch)
+        return loss, {}
+
+    def validate() -> dict[str, float]:
+        images, actions, steps = val_batch
+        predicted = net.rollout(images[:, 0], actions)
+        mask = step_mask(steps, actions.shape[1])
+        abs_err = (predicted - images[:, 1:]).abs().mean((2, 3, 4))
+        return {
+            "loss": float(sequence_loss(net, images, actions, steps)),
+            "abs_error": float((abs_err * mask).sum() / mask.sum()),
+        }
+
+    loop = Loop(
+        kind="prediction",
+        config=config,
+        model=net,
+        optimizer=opt,
+        batches=loader,
+        train_step=train_step,
+        validate=validate,
+        steps=config.steps,
+        eval_every=config.eval_every,
+        log_every=config.log_every,
+        base_lr=config.lr,
+        patience=config.patience,
+    )
+    return run(loop, run_dir, progress)
+
+
+def config_for(preset: str, **overrides) -> PredictionConfig:
+    return replace(PRESETS[preset], **{k: v for k, v in overrides.items() if v is not None})

@@ -1,0 +1,75 @@
+"""Recognition net configuration, with the two presets (paper II.B, DESIGN.md)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from afford.sim.affordances import TYPES
+
+
+@dataclass(frozen=True)
+class RecognitionConfig:
+    # Architecture.
+    in_channels: int = 4  # RGBD
+    widths: tuple[int, ...] = (16, 32, 64, 128)  # channels at strides 2, 4, 8, 16
+    depths: tuple[int, ...] = (1, 2, 2, 1)  # CSP bottlenecks per stage
+    neck_depth: int = 1
+    stride: int = 4  # the one detection layer: a 32x32 grid on 128x128 (the authors')
+    anchors: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)  # angle anchors, degrees
+    types: tuple[str, ...] = TYPES
+    image_size: int = 128
+    # Targets and losses.
+    neighbours: bool = True  # a target also goes to the 2 nearest neighbour cells (YOLO)
+    z_scale: float = 10.0  # z (metres) is regressed as z * z_scale
+    conf_from_error: bool = True  # confidence target falls with the position error (authors)
+    w_conf: float = 1.0
+    w_type: float = 0.5
+    w_xy: float = 1.0
+    w_angle: float = 1.0
+    w_z: float = 1.0
+    w_sym: float = 0.5
+    # Inference.
+    confidence: float = 0.5  # default cut-off; `afford eval recognition` tunes it on val
+    suppress_radius: float = 0.025  # metres: duplicates closer than this ...
+    suppress_angle: float = 10.0  # ... and within this many degrees (any angle if symmetric)
+    # Training.
+    batch_size: int = 32
+    lr: float = 2e-3
+    weight_decay: float = 5e-4
+    steps: int = 5000
+    warmup: int = 200
+    eval_every: int = 500
+    log_every: int = 25
+    shift_px: int = 4
+    threads: int = 2
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def grid(self) -> int:
+        return self.image_size // self.stride
+
+    @property
+    def outputs_per_anchor(self) -> int:
+        # confidence, type logits, x and y offsets, angle offset, z, symmetry
+        return 1 + len(self.types) + 2 + 1 + 1 + 1
+
+
+PRESETS = {
+    # Trains to the Table 1 targets in about an hour on 2 CPU cores (see README).
+    "cpu": RecognitionConfig(),
+    # The paper's widths: the default ScaledYOLOv4 (P5) halved.
+    "paper": RecognitionConfig(
+        widths=(32, 64, 128, 256),
+        depths=(1, 3, 7, 3),
+        neck_depth=2,
+        batch_size=64,
+        lr=1e-3,
+        steps=100_000,
+        eval_every=2000,
+        log_every=100,
+    ),
+    # For tests: seconds per step.
+    "tiny": RecognitionConfig(
+        widths=(4, 8, 8, 8), depths=(1, 1, 1, 1), batch_size=4, steps=20, eval_every=10
+    ),
+}

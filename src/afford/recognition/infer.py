@@ -1,0 +1,73 @@
+"""A trained recognition net as a function: RGBD images -> affordance detections."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from afford.recognition.config import RecognitionConfig
+from afford.recognition.model import RecognitionNet
+from afford.recognition.targets import Detection, decode, suppress
+from afford.training.checkpoint import CheckpointError, load_model_state, read_checkpoint
+
+KIND = "recognition"
+THRESHOLD_FILE = "threshold.json"  # written by `afford eval recognition` (tuned on val)
+
+
+def config_from_dict(d: dict) -> RecognitionConfig:
+    fields = RecognitionConfig.__dataclass_fields__
+    clean = {k: tuple(v) if isinstance(v, list) else v for k, v in d.items() if k in fields}
+    return RecognitionConfig(**clean)
+
+
+def load_net(path: str | Path) -> tuple[RecognitionNet, RecognitionConfig, dict]:
+    tensors, meta = read_checkpoint(path, KIND)
+    try:
+        config = config_from_dict(meta["config"])
+        net = RecognitionNet(config)
+    except (TypeError, ValueError, KeyError) as e:
+        raise CheckpointError(f"{path}: unusable recognition config ({e})") from None
+    load_model_state(net, tensors, path)
+    net.eval()
+    return net, config, meta
+
+
+class Recognizer:
+    """Batched inference with the tuned cut-off and suppression (paper II.B)."""
+
+    def __init__(self, net: RecognitionNet, config: RecognitionConfig, threshold: float | None = None):
+        self.net = net.eval()
+        self.config = config
+        self.threshold = config.confidence if threshold is None else threshold
+
+    @classmethod
+    def from_run(cls, run: str | Path, checkpoint: str = "last.safetensors") -> Recognizer:
+        run = Path(run)
+        net, config, _ = load_net(run / checkpoint)
+        threshold = None
+        if (run / THRESHOLD_FILE).is_file():
+            threshold = json.loads((run / THRESHOLD_FILE).read_text())["threshold"]
+        return cls(net, config, threshold)
+
+    @torch.no_grad()
+    def raw(self, images: np.ndarray | torch.Tensor, batch_size: int = 256) -> torch.Tensor:
+        """Head outputs for (B, H, W, 4) float images in [0, 1] (or (B, 4, H, W) tensors)."""
+        x = torch.as_tensor(images, dtype=torch.float32)
+        if x.ndim == 4 and x.shape[-1] == self.config.in_channels and x.shape[1] != self.config.in_channels:
+            x = x.permute(0, 3, 1, 2)
+        return torch.cat([self.net(x[i : i + batch_size]) for i in range(0, len(x), batch_size)])
+
+    def detections(self, raw: torch.Tensor, threshold: float | None = None) -> list[list[Detection]]:
+        c = self.config
+        t = self.threshold if threshold is None else threshold
+        return [suppress(d, c.suppress_radius, c.suppress_angle) for d in decode(raw, c, t)]
+
+    def __call__(self, images: np.ndarray | torch.Tensor, batch_size: int = 256) -> list[list[Detection]]:
+        return self.detections(self.raw(images, batch_size))
+
+    def describe(self) -> dict:
+        return {"threshold": self.threshold, "config": asdict(self.config)}

@@ -1,0 +1,67 @@
+"""The paper's Table 1 criteria (IV.A): recall per type and spurious detections per image.
+
+A true affordance is found when a detection of its type lies within 2.5 cm of it and within
+5 degrees of its angle (any angle when the true affordance is symmetric). A detection that
+finds no true affordance is spurious.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from afford.recognition.targets import Detection, wrap180
+from afford.sim.affordances import TYPES, Affordance
+
+MATCH_RADIUS = 0.025  # metres
+MATCH_ANGLE = 5.0  # degrees
+
+
+def matches(det: Affordance, true: Affordance) -> bool:
+    if det.type != true.type:
+        return False
+    if np.linalg.norm(np.subtract(det.position, true.position)) > MATCH_RADIUS:
+        return False
+    return true.symmetric or abs(wrap180(det.angle - true.angle)) <= MATCH_ANGLE
+
+
+@dataclass
+class Tally:
+    hits: dict[str, int] = field(default_factory=lambda: {t: 0 for t in TYPES})
+    totals: dict[str, int] = field(default_factory=lambda: {t: 0 for t in TYPES})
+    spurious: int = 0
+    images: int = 0
+
+    def add(self, detections: list[Detection], truths: list[Affordance]) -> None:
+        self.images += 1
+        for t in truths:
+            self.totals[t.type] += 1
+            if any(matches(d.affordance, t) for d in detections):
+                self.hits[t.type] += 1
+        self.spurious += sum(not any(matches(d.affordance, t) for t in truths) for d in detections)
+
+    @property
+    def recall(self) -> float:
+        total = sum(self.totals.values())
+        return sum(self.hits.values()) / total if total else 1.0
+
+    @property
+    def spurious_per_image(self) -> float:
+        return self.spurious / max(self.images, 1)
+
+    def table(self) -> dict:
+        per = {
+            t: {
+                "hits": self.hits[t],
+                "total": self.totals[t],
+                "recall": self.hits[t] / max(self.totals[t], 1),
+            }
+            for t in TYPES
+        }
+        per["all"] = {
+            "hits": sum(self.hits.values()),
+            "total": sum(self.totals.values()),
+            "recall": self.recall,
+        }
+        return {"images": self.images, "recall": per, "spurious_per_image": self.spurious_per_image}

@@ -1,0 +1,95 @@
+"""`afford train recognition`: the recognition net on a generated dataset."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.utils.data import DataLoader
+
+from afford.data.augment import AugmentConfig
+from afford.data.format import Dataset
+from afford.data.torch_data import RecognitionData, collate_recognition
+from afford.recognition.config import RecognitionConfig
+from afford.recognition.metrics import Tally
+from afford.recognition.model import RecognitionNet
+from afford.recognition.targets import build_targets, decode, loss, suppress
+from afford.sim.affordances import Affordance
+from afford.training.loop import Loop, LoopState, run
+
+VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
+
+
+def warmup_cosine(warmup: int, steps: int):
+    def factor(step: int) -> float:
+        if step < warmup:
+            return (step + 1) / warmup
+        return 0.05 + 0.95 * 0.5 * (
+            1 + math.cos(math.pi * min(1.0, (step - warmup) / max(steps - warmup, 1)))
+        )
+
+    return factor
+
+
+def rows_to_affordances(rows: torch.Tensor | np.ndarray) -> list[Affordance]:
+    from afford.data.format import decode_affordance
+
+    return [decode_affordance(np.asarray(r)) for r in rows]
+
+
+def train(
+    data_dir: str | Path, config: RecognitionConfig, run_dir: str | Path, progress: bool = True
+) -> LoopState:
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(0)
+    data = Dataset(data_dir)
+    augment = AugmentConfig(shift_px=config.shift_px, mirror=False, angle_flip=False)
+    train_set = RecognitionData(data, "train", augment)
+    val_set = RecognitionData(data, "val")
+    n_val = min(VAL_IMAGES, len(val_set))
+    val_batch = collate_recognition([val_set[i] for i in np.linspace(0, len(val_set) - 1, n_val).astype(int)])
+    loader = DataLoader(
+        train_set, batch_size=config.batch_size, shuffle=True, drop_last=True, collate_fn=collate_recognition
+    )
+    net = RecognitionNet(config)
+    opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
+
+    def train_step(batch):
+        images, rows = batch
+        return loss(net(images), build_targets(rows, config), config)
+
+    def validate() -> dict[str, float]:
+        images, rows = val_batch
+        raw = torch.cat([net(images[i : i + 64]) for i in range(0, len(images), 64)])
+        total, parts = loss(raw, build_targets(rows, config), config)
+        tally = Tally()
+        for dets, truth in zip(decode(raw, config), rows, strict=True):
+            tally.add(
+                suppress(dets, config.suppress_radius, config.suppress_angle), rows_to_affordances(truth)
+            )
+        return {"loss": float(total), "recall": tally.recall, "spurious_per_image": tally.spurious_per_image}
+
+    loop = Loop(
+        kind="recognition",
+        config=config,
+        model=net,
+        optimizer=opt,
+        batches=loader,
+        train_step=train_step,
+        validate=validate,
+        steps=config.steps,
+        eval_every=config.eval_every,
+        log_every=config.log_every,
+        base_lr=config.lr,
+        lr_at=warmup_cosine(config.warmup, config.steps),
+    )
+    return run(loop, run_dir, progress)
+
+
+def config_for(preset: str, **overrides) -> RecognitionConfig:
+    from afford.recognition.config import PRESETS
+
+    return replace(PRESETS[preset], **{k: v for k, v in overrides.items() if v is not None})

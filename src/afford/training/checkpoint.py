@@ -1,0 +1,106 @@
+"""Checkpoints: one safetensors file holding the weights, the optimiser state and the config.
+
+Everything a resumed run or a later evaluation needs is in the file: tensors under
+``model.*`` and ``optim.*``, and in the safetensors metadata a JSON record with the net's kind
+("recognition" or "prediction"), its config, the training step and the optimiser's
+hyper-parameters. Files are written to a temporary name and renamed: a kill never leaves half a
+checkpoint.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import torch
+from safetensors import SafetensorError
+from safetensors.torch import load_file, save_file
+from torch import nn
+
+FORMAT_VERSION = 1
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that is missing, corrupt, or of another kind or architecture."""
+
+
+def save_checkpoint(
+    path: str | Path,
+    model: nn.Module,
+    kind: str,
+    config: dict,
+    step: int,
+    optimizer: torch.optim.Optimizer | None = None,
+    extra: dict | None = None,
+) -> None:
+    tensors = {f"model.{k}": v.detach().contiguous().clone() for k, v in model.state_dict().items()}
+    groups = []
+    if optimizer is not None:
+        state = optimizer.state_dict()
+        for idx, entries in state["state"].items():
+            for name, value in entries.items():
+                t = value if torch.is_tensor(value) else torch.tensor(value)
+                tensors[f"optim.{idx}.{name}"] = t.detach().contiguous().clone()
+        groups = state["param_groups"]
+    meta = {
+        "format": FORMAT_VERSION,
+        "kind": kind,
+        "config": config,
+        "step": step,
+        "param_groups": groups,
+        "extra": extra or {},
+    }
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    save_file(tensors, str(tmp), metadata={"afford": json.dumps(meta)})
+    os.replace(tmp, path)
+
+
+def read_checkpoint(path: str | Path, kind: str) -> tuple[dict[str, torch.Tensor], dict]:
+    """(tensors, metadata) of a checkpoint of `kind`; CheckpointError naming the problem."""
+    path = Path(path)
+    if not path.is_file():
+        raise CheckpointError(f"{path}: no such checkpoint")
+    try:
+        from safetensors import safe_open
+
+        with safe_open(str(path), framework="pt") as f:
+            raw_meta = (f.metadata() or {}).get("afford")
+        tensors = load_file(str(path))
+    except (SafetensorError, OSError, ValueError) as e:
+        raise CheckpointError(f"{path}: not a readable safetensors checkpoint ({e})") from None
+    if raw_meta is None:
+        raise CheckpointError(f"{path}: a safetensors file, but not an afford checkpoint (no metadata)")
+    meta = json.loads(raw_meta)
+    if meta.get("kind") != kind:
+        raise CheckpointError(f"{path}: a {meta.get('kind')} checkpoint, not a {kind} one")
+    return tensors, meta
+
+
+def load_model_state(model: nn.Module, tensors: dict[str, torch.Tensor], path: str | Path) -> None:
+    """Copy `model.*` tensors into `model`; a different architecture is a CheckpointError."""
+    state = {k[len("model.") :]: v for k, v in tensors.items() if k.startswith("model.")}
+    own = model.state_dict()
+    missing = sorted(set(own) - set(state))
+    unexpected = sorted(set(state) - set(own))
+    wrong = [k for k in own if k in state and own[k].shape != state[k].shape]
+    if missing or unexpected or wrong:
+        detail = (missing + unexpected + wrong)[:3]
+        raise CheckpointError(
+            f"{path}: the checkpoint's architecture differs from its config's net ({', '.join(detail)} ...)"
+        )
+    model.load_state_dict(state)
+
+
+def load_optimizer_state(
+    optimizer: torch.optim.Optimizer, tensors: dict[str, torch.Tensor], meta: dict
+) -> None:
+    state: dict[int, dict] = {}
+    for key, value in tensors.items():
+        if key.startswith("optim."):
+            _, idx, name = key.split(".", 2)
+            state.setdefault(int(idx), {})[name] = value
+    if meta.get("param_groups"):
+        optimizer.load_state_dict({"state": state, "param_groups": meta["param_groups"]})

@@ -1,0 +1,152 @@
+"""One training loop for both nets: progress bar, logs, checkpoints, resumption after a kill.
+
+RUN/last.safetensors is rewritten at every evaluation (and on Ctrl-C); a re-run of the same
+command loads it and continues from its step. RUN/best.safetensors keeps the weights with the
+lowest validation loss. RUN/config.json holds the config for people to read.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import torch
+from torch import nn
+
+from afford.training.checkpoint import (
+    load_model_state,
+    load_optimizer_state,
+    read_checkpoint,
+    save_checkpoint,
+)
+from afford.training.log import RunLog
+
+LAST, BEST = "last.safetensors", "best.safetensors"
+
+
+@dataclass
+class LoopState:
+    step: int = 0
+    best: float = float("inf")
+    evals_without_improvement: int = 0
+    lr_scale: float = 1.0
+    seconds: float = 0.0  # training time summed over resumptions
+    extra: dict = field(default_factory=dict)
+
+
+@dataclass
+class Loop:
+    kind: str  # "recognition" or "prediction"
+    config: object  # the net's config dataclass
+    model: nn.Module
+    optimizer: torch.optim.Optimizer
+    batches: Iterable  # one epoch of batches; iterated again as needed
+    train_step: Callable[[object], tuple[torch.Tensor, dict[str, float]]]
+    validate: Callable[[], dict[str, float]]  # must contain "loss"
+    steps: int
+    eval_every: int
+    log_every: int
+    base_lr: float
+    lr_at: Callable[[int], float] | None = None  # lr multiplier by step (warm-up, cosine)
+    patience: int | None = None  # halve the lr after this many evaluations without improvement
+
+
+def _forever(batches: Iterable) -> Iterator:
+    while True:
+        yield from batches
+
+
+def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
+    from tqdm import tqdm
+
+    run_dir = Path(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    config_dict = asdict(loop.config)
+    (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
+    state = LoopState()
+    log = RunLog(run_dir)
+    if (run_dir / LAST).is_file():
+        tensors, meta = read_checkpoint(run_dir / LAST, loop.kind)
+        load_model_state(loop.model, tensors, run_dir / LAST)
+        load_optimizer_state(loop.optimizer, tensors, meta)
+        state = LoopState(**meta["extra"]["loop"])
+        log.truncate_after(state.step)
+
+    def save(path: str) -> None:
+        save_checkpoint(
+            run_dir / path,
+            loop.model,
+            loop.kind,
+            config_dict,
+            state.step,
+            loop.optimizer,
+            {"loop": asdict(state)},
+        )
+
+    def set_lr() -> None:
+        scale = state.lr_scale * (loop.lr_at(state.step) if loop.lr_at else 1.0)
+        for g in loop.optimizer.param_groups:
+            g["lr"] = loop.base_lr * scale
+
+    def evaluate() -> None:
+        loop.model.eval()
+        with torch.no_grad():
+            values = loop.validate()
+        loop.model.train()
+        improved = values["loss"] < state.best
+        if improved:
+            state.best, state.evals_without_improvement = values["loss"], 0
+        else:
+            state.evals_without_improvement += 1
+            if loop.patience and state.evals_without_improvement >= loop.patience:
+                state.lr_scale /= 2  # the paper's schedule for the prediction nets
+                state.evals_without_improvement = 0
+        log.add(state.step, {f"val/{k}": v for k, v in values.items()})
+        save(LAST)
+        if improved:
+            save(BEST)
+        log.plot(f"{loop.kind}: {run_dir.name}")
+
+    bar = tqdm(
+        total=loop.steps, initial=state.step, disable=not progress, desc=f"train {loop.kind}", unit="step"
+    )
+    loop.model.train()
+    batches = _forever(loop.batches)
+    t0, running = time.perf_counter(), {}
+    try:
+        while state.step < loop.steps:
+            batch = next(batches)
+            set_lr()
+            loss, parts = loop.train_step(batch)
+            loop.optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            loop.optimizer.step()
+            state.step += 1
+            for k, v in {"loss": float(loss.detach()), **parts}.items():
+                running[k] = running.get(k, 0.0) + v
+            if state.step % loop.log_every == 0:
+                n = loop.log_every
+                log.add(state.step, {f"train/{k}": v / n for k, v in running.items()} | {"lr": _lr(loop)})
+                bar.set_postfix(loss=f"{running['loss'] / n:.4f}")
+                running = {}
+            bar.update(1)
+            if state.step % loop.eval_every == 0 or state.step == loop.steps:
+                state.seconds += time.perf_counter() - t0
+                t0 = time.perf_counter()
+                evaluate()
+    except KeyboardInterrupt:
+        state.seconds += time.perf_counter() - t0
+        save(LAST)
+        bar.close()
+        log.close()
+        raise
+    bar.close()
+    log.close()
+    return state
+
+
+def _lr(loop: Loop) -> float:
+    return float(loop.optimizer.param_groups[0]["lr"])

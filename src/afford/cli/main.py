@@ -243,9 +243,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     from afford.data.format import DataError
-    from afford.training.checkpoint import CheckpointError
     from afford.planning.tasks import TaskError
     from afford.sim.scene import SceneError
+    from afford.training.checkpoint import CheckpointError
 
     args = build_parser().parse_args(argv)
     try:

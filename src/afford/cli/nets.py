@@ -44,7 +44,8 @@ def _report_training(args, state) -> int:
         print(json.dumps(record, indent=2))
     else:
         print(
-            f"{args.out}: {state.step} steps in {state.seconds / 60:.1f} min, best val loss {state.best:.5f}; "
+            f"{args.out}: {state.step} steps in {state.seconds / 60:.1f} min, "
+            f"best val loss {state.best:.5f}; "
             f"curves: {record['curves']}"
         )
     return 0
@@ -63,7 +64,8 @@ def add_parsers(sub) -> None:
             help=text.split(" (")[0].lower(),
             description=text
             + " Progress bar; RUN/last.safetensors is written at every evaluation and a re-run "
-            "of the same command resumes from it; TensorBoard events in RUN/tensorboard, curves in RUN/curves.png.",
+            "of the same command resumes from it; TensorBoard events in RUN/tensorboard, "
+            "curves in RUN/curves.png.",
         )
         p.add_argument("--data", required=True, metavar="DIR", help="a dataset made by `afford generate`")
         p.add_argument("--preset", choices=("cpu", "paper", "tiny"), default="cpu")

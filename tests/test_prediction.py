@@ -1,0 +1,130 @@
+"""Prediction pathway: shapes, eq. (3), routing by affordance type, SignSGD, learning."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from afford.data.format import encode_affordance
+from afford.prediction.config import PRESETS
+from afford.prediction.model import PredictionNet, affordance_pixel, apply_difference, normalise_latent
+from afford.prediction.train import sequence_loss
+from afford.sim import camera
+from afford.sim.affordances import Affordance
+from afford.training.signsgd import SignSGD
+
+TINY = PRESETS["tiny"]
+
+
+def actions(*affs: Affordance) -> torch.Tensor:
+    return torch.from_numpy(np.stack([encode_affordance(a) for a in affs]))
+
+
+def test_rollout_shapes_and_range():
+    net = PredictionNet(TINY)
+    images = torch.rand(3, 4, 128, 128)
+    acts = torch.stack(
+        [
+            actions(
+                Affordance("grasp", (0, 0.3, 0.02), 0, True), Affordance("place", (0.1, 0.3, 0.06), 0, True)
+            )
+        ]
+        * 3
+    )
+    out = net.rollout(images, acts)
+    assert out.shape == (3, 2, 4, 128, 128)
+    assert out.min() >= 0 and out.max() <= 1
+
+
+def test_latent_normalisation_keeps_norm_below_one():
+    a = torch.randn(5, 16) * 100
+    assert torch.all(normalise_latent(a).norm(dim=-1) < 1)
+
+
+def test_eq3_mask_zero_keeps_mask_one_takes():
+    state = torch.rand(2, 4, 8, 8)
+    new = torch.rand(2, 4, 8, 8)
+    keep = apply_difference(state, torch.cat([new, torch.zeros(2, 1, 8, 8)], 1))
+    take = apply_difference(state, torch.cat([new, torch.ones(2, 1, 8, 8)], 1))
+    assert torch.equal(keep, state) and torch.allclose(take, new)
+    half = apply_difference(state, torch.cat([new, torch.full((2, 1, 8, 8), 0.5)], 1))
+    assert torch.allclose(half, (state + new) / 2)
+
+
+def test_each_example_goes_through_its_own_type_module():
+    torch.manual_seed(0)
+    net = PredictionNet(TINY).eval()
+    image = torch.rand(1, 4, 128, 128)
+    latent = net.encoder(image)
+    memory = torch.zeros_like(latent)
+    grasp = actions(Affordance("grasp", (0, 0.3, 0.02), 0, True))
+    turn = actions(Affordance("turn", (0, 0.3, 0.02), 0, False, 90))
+    with torch.no_grad():
+        batch = net.step(
+            latent.repeat(2, 1), memory.repeat(2, 1), image.repeat(2, 1, 1, 1), torch.cat([grasp, turn])
+        )
+        alone = net.step(latent, memory, image, turn)
+        # Silence the turn module: only the turn example may change.
+        for p in net.modules_by_type[2].parameters():
+            p.zero_()
+        silenced = net.step(
+            latent.repeat(2, 1), memory.repeat(2, 1), image.repeat(2, 1, 1, 1), torch.cat([grasp, turn])
+        )
+    assert torch.allclose(batch[0][1], alone[0][0], atol=1e-6)  # mixed batch == one at a time
+    assert torch.allclose(silenced[0][0], batch[0][0], atol=1e-6)
+    assert not torch.allclose(silenced[0][1], batch[0][1], atol=1e-6)
+
+
+def test_affordance_pixel_reads_the_projected_pixel():
+    image = torch.zeros(1, 4, 128, 128)
+    pos = np.array([0.07, 0.33, 0.05])
+    r, c = camera.pixel_index(pos)
+    image[0, :, r, c] = torch.tensor([0.1, 0.2, 0.3, 0.4])
+    got = affordance_pixel(image, torch.tensor(pos, dtype=torch.float32)[None])
+    assert torch.allclose(got[0], torch.tensor([0.1, 0.2, 0.3, 0.4]))
+
+
+def test_no_pixel_input_zeroes_it():
+    from dataclasses import replace
+
+    net = PredictionNet(replace(TINY, pixel_input=False))
+    vec = net.action_vector(actions(Affordance("grasp", (0, 0.3, 0.02), 0, True)), torch.rand(1, 4, 128, 128))
+    assert vec.shape == (1, 9) and torch.all(vec[0, 5:] == 0)
+
+
+def test_signsgd_moves_each_weight_by_lr_against_its_gradient_sign():
+    w = torch.nn.Parameter(torch.tensor([1.0, -2.0, 3.0]))
+    opt = SignSGD([w], lr=0.1)
+    (w * torch.tensor([5.0, -0.01, 0.0])).sum().backward()
+    opt.step()
+    assert torch.allclose(w.detach(), torch.tensor([0.9, -1.9, 3.0]))
+    with pytest.raises(ValueError):
+        SignSGD([w], lr=0)
+
+
+def test_loss_falls_on_a_tiny_batch():
+    torch.manual_seed(0)
+    net = PredictionNet(TINY)
+    # A grey table; the first action puts a bright square down, the second a dark one.
+    images = torch.full((2, 3, 4, 128, 128), 0.5)
+    images[:, 1:, :, 40:60, 40:60] = 0.9
+    images[:, 2:, :, 70:90, 70:90] = 0.1
+    acts = torch.stack(
+        [
+            actions(
+                Affordance("grasp", (0, 0.3, 0.02), 0, True), Affordance("place", (0.1, 0.3, 0.06), 0, True)
+            )
+        ]
+        * 2
+    )
+    steps = torch.tensor([2, 1])
+    opt = torch.optim.Adam(net.parameters(), lr=1e-2)
+    losses = []
+    for _ in range(30):
+        loss = sequence_loss(net, images, acts, steps)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(float(loss.detach()))
+    assert losses[-1] < 0.3 * losses[0]

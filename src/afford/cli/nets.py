@@ -51,6 +51,43 @@ def _report_training(args, state) -> int:
     return 0
 
 
+def cmd_eval_recognition(args) -> int:
+    from afford.recognition.evaluate import evaluate, format_table
+
+    result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
+    _write_result(args, result, "table1.json")
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(format_table(result))
+        print(f"pictures: {Path(args.run) / 'detections'}/; record: {Path(args.run) / 'table1.json'}")
+    return 0
+
+
+def cmd_eval_prediction(args) -> int:
+    from afford.prediction.evaluate import evaluate, format_table
+
+    result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
+    _write_result(args, result, "table2.json")
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(format_table(result))
+        print(f"pictures: {Path(args.run) / 'predictions'}/; record: {Path(args.run) / 'table2.json'}")
+    return 0
+
+
+def _write_result(args, result: dict, name: str) -> None:
+    (Path(args.run) / name).write_text(json.dumps(result, indent=2) + "\n")
+
+
+def _check_run(run: str) -> None:
+    from afford.cli.main import CLIError
+
+    if not Path(run).is_dir():
+        raise CLIError(f"{run}: no such run folder (make one with `afford train ...`)")
+
+
 def add_parsers(sub) -> None:
     t = sub.add_parser("train", help="train a net", description="Train the recognition or prediction net.")
     tsub = t.add_subparsers(dest="net", required=True)
@@ -80,3 +117,29 @@ def add_parsers(sub) -> None:
                 help="leave the affordance pixel's RGBD out of the action vector (Table 2 ablation)",
             )
         p.set_defaults(func=cmd_train_recognition if net == "recognition" else cmd_train_prediction)
+
+    e = sub.add_parser("eval", help="evaluate a trained net", description="Evaluate a trained net.")
+    esub = e.add_subparsers(dest="net", required=True)
+    r = esub.add_parser(
+        "recognition",
+        help="the paper's Table 1",
+        description="Tune the confidence cut-off on val (saved in RUN/threshold.json), then report the "
+        "paper's Table 1 on test and on 100 training examples: recall per type (right type, within 2.5 cm "
+        "and 5 degrees; any angle for a symmetric affordance) and spurious detections per image. Writes "
+        "Fig. 6-style pictures to RUN/detections/.",
+    )
+    p = esub.add_parser(
+        "prediction",
+        help="the paper's Table 2",
+        description="The paper's Table 2: mean absolute RGBD error per step (1-4) over all pixels and "
+        "over the pixels that changed, mean (sd), on test and 500 training sequences. Writes Fig. 7-style "
+        "pictures of non-canonical effects to RUN/predictions/.",
+    )
+    for q, func in ((r, cmd_eval_recognition), (p, cmd_eval_prediction)):
+        q.add_argument("--run", required=True, metavar="RUN")
+        q.add_argument("--data", required=True, metavar="DIR")
+        q.add_argument(
+            "--checkpoint", default="best.safetensors", help="file in RUN (default best.safetensors)"
+        )
+        q.add_argument("--json", action="store_true")
+        q.set_defaults(func=lambda a, f=func: (_check_run(a.run), f(a))[1])

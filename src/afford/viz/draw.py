@@ -71,6 +71,17 @@ def hstack(images: list[Image.Image], gap: int = 4, background=(255, 255, 255)) 
     return out
 
 
+def vstack(images: list[Image.Image], gap: int = 4, background=(255, 255, 255)) -> Image.Image:
+    w = max(i.width for i in images)
+    h = sum(i.height for i in images) + gap * (len(images) - 1)
+    out = Image.new("RGB", (w, h), background)
+    y = 0
+    for i in images:
+        out.paste(i, (0, y))
+        y += i.height + gap
+    return out
+
+
 def label(pil: Image.Image, text: str) -> Image.Image:
     out = Image.new("RGB", (pil.width, pil.height + 14), (255, 255, 255))
     out.paste(pil, (0, 14))

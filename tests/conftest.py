@@ -13,3 +13,17 @@ def scene():
     s = Scene()
     yield s
     s.close()
+
+
+SMALL_SEQUENCES, SMALL_SHARD = 6, 2
+
+
+@pytest.fixture(scope="session")
+def small_dataset(tmp_path_factory) -> Path:
+    """A real generated dataset of 6 sequences (seed 3, 1 worker, shards of 2), made once."""
+    from afford.data.generate import GenerateConfig, generate
+
+    root = tmp_path_factory.mktemp("data") / "one-worker"
+    config = GenerateConfig(sequences=SMALL_SEQUENCES, seed=3, workers=1, shard_size=SMALL_SHARD)
+    generate(root, config, progress=False)
+    return root

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SMALL_SEQUENCES as N  # noqa: E402
+from conftest import SMALL_SHARD as SHARD  # noqa: E402
 
 from afford.cli.main import main
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
@@ -28,8 +30,6 @@ from afford.data.generate import GenerateConfig, generate
 from afford.sim import camera
 from afford.sim.affordances import Affordance
 
-N, SHARD = 6, 2
-
 
 def _generate_cli(out: Path, n: int, workers: int, shard: int = SHARD, **kw) -> subprocess.Popen:
     cmd = [sys.executable, "-m", "afford.cli.main", "generate", "--out", str(out), "--sequences", str(n)]
@@ -37,11 +37,9 @@ def _generate_cli(out: Path, n: int, workers: int, shard: int = SHARD, **kw) -> 
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **kw)
 
 
-@pytest.fixture(scope="module")
-def small(tmp_path_factory) -> Path:
-    root = tmp_path_factory.mktemp("data") / "one-worker"
-    generate(root, GenerateConfig(sequences=N, seed=3, workers=1, shard_size=SHARD), progress=False)
-    return root
+@pytest.fixture
+def small(small_dataset) -> Path:
+    return small_dataset
 
 
 def _same(a: Dataset, b: Dataset, i: int) -> bool:

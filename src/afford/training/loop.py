@@ -65,7 +65,6 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     config_dict = asdict(loop.config)
-    (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
     state = LoopState()
     log = RunLog(run_dir)
     if (run_dir / LAST).is_file():
@@ -74,6 +73,7 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
         load_optimizer_state(loop.optimizer, tensors, meta)
         state = LoopState(**meta["extra"]["loop"])
         log.truncate_after(state.step)
+    (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
 
     def save(path: str) -> None:
         save_checkpoint(

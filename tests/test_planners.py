@@ -85,7 +85,7 @@ def test_bench_tasks_cli_tables_a_folder(tmp_path):
     (tmp_path / "toy.json").write_text(json.dumps(GOOD))
     r = afford("bench", "tasks", "--planner", "oracle", "--tasks", str(tmp_path), "--json")
     assert r.returncode == 0, r.stderr
-    table = json.loads(r.stdout)
+    table = json.loads(r.stdout)["oracle"]
     assert table["solved"] == 1 and table["tasks"][0]["plan_length"] == 2
     assert table["tasks"][0]["planning_seconds"] >= 0
     empty = afford("bench", "tasks", "--tasks", str(tmp_path / "none"))

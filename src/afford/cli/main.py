@@ -114,7 +114,8 @@ def cmd_plan(args) -> int:
 
     scene = Scene()
     task = load_task(args.task, scene)
-    outcome = solve(task, args.planner, scene, SearchConfig(progress=not args.json))
+    learned = _learned(args) if args.planner == "learned" else None
+    outcome = solve(task, args.planner, scene, SearchConfig(progress=not args.json), learned)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     picture = out / f"{task.name}-{args.planner}.png"
@@ -136,7 +137,7 @@ def cmd_plan(args) -> int:
 
 def cmd_bench_tasks(args) -> int:
     """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
-    from afford.planning.run import solve
+    from afford.planning.run import PLANNERS, solve
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
     from afford.sim.scene import Scene
@@ -145,29 +146,44 @@ def cmd_bench_tasks(args) -> int:
     files = sorted(Path(args.tasks).glob("*.json"))
     if not files:
         raise CLIError(f"{args.tasks}: no task files (*.json) there")
+    planners = PLANNERS if args.planner == "all" else (args.planner,)
+    learned = _learned(args) if "learned" in planners else None
     scene = Scene()
-    rows = []
-    for f in files:
-        task = load_task(f, scene)
-        live = not args.json and sys.stdout.isatty()
-        if live:
-            print(f"{task.name} ...", end="", flush=True)
-        o = solve(task, args.planner, scene, SearchConfig(progress=False))
-        if args.out:
-            plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{args.planner}.png")
-        rows.append(o.to_dict())
+    report = {}
+    for planner in planners:
+        rows = []
+        for f in files:
+            task = load_task(f, scene)
+            live = not args.json and sys.stdout.isatty()
+            if live:
+                print(f"{task.name} ...", end="", flush=True)
+            o = solve(task, planner, scene, SearchConfig(progress=False), learned)
+            if args.out:
+                plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
+            rows.append(o.to_dict())
+            if not args.json:
+                back = "\r" if live else ""
+                print(f"{back}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
+                if o.reason:
+                    print(f"{'':32s} {o.reason}")
+        solved = sum(r["solved"] for r in rows)
+        report[planner] = {"solved": solved, "tasks": rows}
         if not args.json:
-            back = "\r" if live else ""
-            print(f"{back}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
-            if o.reason:
-                print(f"{'':32s} {o.reason}")
-    solved = sum(r["solved"] for r in rows)
+            print(f"{planner}: {solved}/{len(rows)} tasks solved")
     if args.json:
-        print(json.dumps({"planner": args.planner, "solved": solved, "tasks": rows}, indent=2))
-    else:
-        print(f"{args.planner}: {solved}/{len(rows)} tasks solved")
+        print(json.dumps(report, indent=2))
     scene.close()
     return 0
+
+
+def _learned(args):
+    """The trained nets for the learned planner: --weights, or the ones shipped in the package."""
+    from afford.planning.learned import load_learned
+
+    try:
+        return load_learned(args.weights)
+    except FileNotFoundError as e:
+        raise CLIError(str(e)) from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -211,13 +227,21 @@ def build_parser() -> argparse.ArgumentParser:
         description="Plan a task (a JSON task file, see tasks/paper/) by tree search over affordances, "
         "execute the plan in the simulator and check the task's success predicate. Planners: oracle (the "
         "simulator as a perfect world model, paper II.D search), symbolic (canonical effects only, "
-        "breadth-first). Writes a picture like the paper's Fig. 8 and a JSON record. Exit status 1 when "
+        "breadth-first), learned (the paper's method: the same search with the trained recognition and "
+        "prediction nets). Writes a picture like the paper's Fig. 8 and a JSON record. Exit status 1 when "
         "the executed plan misses the goal.",
     )
     pl.add_argument("--task", required=True, metavar="TASK.json")
     pl.add_argument("--planner", choices=PLANNERS, default="oracle")
     pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
     pl.add_argument("--json", action="store_true", help="print the record as JSON")
+    pl.add_argument(
+        "--weights",
+        "--run-dir",
+        metavar="DIR",
+        help="learned planner: a folder with recognition.safetensors and prediction.safetensors, or with "
+        "recognition/ and prediction/ training runs (default: the weights shipped in the package)",
+    )
     pl.set_defaults(func=cmd_plan)
 
     b = sub.add_parser("bench", help="benchmarks", description="Benchmarks over a set of tasks.")
@@ -228,7 +252,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Plan every task file in a folder with one planner, execute each plan, and print "
         "solved / plan / plan length / nodes / planning seconds per task.",
     )
-    bt.add_argument("--planner", choices=PLANNERS, default="oracle")
+    bt.add_argument("--planner", choices=(*PLANNERS, "all"), default="oracle")
+    bt.add_argument(
+        "--weights", "--run-dir", metavar="DIR", help="learned planner's weights (see afford plan)"
+    )
     bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel, execute_plan
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
@@ -17,7 +18,7 @@ from afford.planning.tree import SearchConfig, search
 from afford.sim.affordances import Affordance
 from afford.sim.scene import Scene
 
-PLANNERS = ("oracle", "symbolic")
+PLANNERS = ("oracle", "symbolic", "learned")
 DEVIATION = 0.03  # metres from its canonical place at which an object's fate counts as non-canonical
 
 
@@ -49,17 +50,28 @@ class Outcome:
         }
 
 
-def solve(task: Task, planner: str, scene: Scene, config: SearchConfig | None = None) -> Outcome:
+def solve(
+    task: Task, planner: str, scene: Scene, config: SearchConfig | None = None, learned=None
+) -> Outcome:
+    """Plan `task` with `planner`; `learned` is the (Recognizer, PredictionNet) pair for "learned"."""
     config = config or SearchConfig()
     if planner == "oracle":
-        return _solve_oracle(task, scene, config)
+        return _solve_search(task, "oracle", OracleModel(scene, task.scene), scene, config)
+    if planner == "learned":
+        if learned is None:
+            from afford.planning.learned import load_learned
+
+            learned = load_learned()
+        model = LearnedModel(scene, task.scene, *learned)
+        return _solve_search(task, "learned", model, scene, config)
     if planner == "symbolic":
         return _solve_symbolic(task, scene)
     raise ValueError(f"unknown planner {planner!r}; expected one of {PLANNERS}")
 
 
-def _solve_oracle(task: Task, scene: Scene, config: SearchConfig) -> Outcome:
-    result = search(OracleModel(scene, task.scene), task.goal, task.max_steps, config)
+def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConfig) -> Outcome:
+    """Tree search (paper II.D) on a world model, then the plan executed in the simulator."""
+    result = search(model, task.goal, task.max_steps, config)
     planned = [n.image for n in result.path()]
     ex = execute_plan(scene, task.scene, result.plan, task.success)
     reason = (
@@ -67,7 +79,7 @@ def _solve_oracle(task: Task, scene: Scene, config: SearchConfig) -> Outcome:
     )
     return Outcome(
         task.name,
-        "oracle",
+        name,
         result.plan,
         planned,
         ex.images,

@@ -59,7 +59,8 @@ def main() -> None:
     for preset in ("cpu", "paper"):
         r = result[preset]
         print(
-            f"prediction {preset:5s} ({r['parameters']:,} parameters): {r['batches_per_second']:.2f} batches/s"
+            f"prediction {preset:5s} ({r['parameters']:,} parameters): "
+            f"{r['batches_per_second']:.2f} batches/s"
         )
     print(
         f"paper preset, 1 M batches (the paper's schedule) on {args.threads} threads: "

@@ -220,7 +220,7 @@ def cmd_bench_random(args) -> int:
         for p in planners:
             secs = np.mean([r[p]["seconds"] for r in rows])
             print(
-                f"{p:9s} {summary[p]:.2f} success over {len(rows)} random tasks ({secs:.1f} s planning per task)"
+                f"{p:9s} {summary[p]:.2f} success over {len(rows)} random tasks ({secs:.1f} s planning each)"
             )
     scene.close()
     return 0

@@ -88,6 +88,29 @@ def _check_run(run: str) -> None:
         raise CLIError(f"{run}: no such run folder (make one with `afford train ...`)")
 
 
+def cmd_export(args) -> int:
+    """Ship a trained pair: weights only, float16, the tuned cut-off inside."""
+    from afford.planning.learned import PREDICTION_FILE, RECOGNITION_FILE
+    from afford.recognition.infer import THRESHOLD_FILE
+    from afford.training.checkpoint import export_weights
+
+    rec_run, pred_run = Path(args.recognition), Path(args.prediction)
+    for run in (rec_run, pred_run):
+        _check_run(str(run))
+    threshold_file = rec_run / THRESHOLD_FILE
+    extra = json.loads(threshold_file.read_text()) if threshold_file.is_file() else {}
+    out = Path(args.out)
+    sizes = {
+        RECOGNITION_FILE: export_weights(
+            rec_run / args.checkpoint, out / RECOGNITION_FILE, "recognition", extra=extra
+        ),
+        PREDICTION_FILE: export_weights(pred_run / args.checkpoint, out / PREDICTION_FILE, "prediction"),
+    }
+    for name, size in sizes.items():
+        print(f"{out / name}: {size / 2**20:.1f} MiB")
+    return 0
+
+
 def add_parsers(sub) -> None:
     t = sub.add_parser("train", help="train a net", description="Train the recognition or prediction net.")
     tsub = t.add_subparsers(dest="net", required=True)
@@ -143,3 +166,16 @@ def add_parsers(sub) -> None:
         )
         q.add_argument("--json", action="store_true")
         q.set_defaults(func=lambda a, f=func: (_check_run(a.run), f(a))[1])
+
+    x = sub.add_parser(
+        "export",
+        help="write a trained recognition + prediction pair as shippable weights",
+        description="Write the weights of a recognition run and a prediction run (no optimiser state, "
+        "float16, the recognition cut-off tuned by `afford eval recognition` inside) to a folder that "
+        "`afford plan --planner learned --weights DIR` reads. The package ships such a folder.",
+    )
+    x.add_argument("--recognition", required=True, metavar="RUN")
+    x.add_argument("--prediction", required=True, metavar="RUN")
+    x.add_argument("--checkpoint", default="best.safetensors")
+    x.add_argument("--out", required=True, metavar="DIR")
+    x.set_defaults(func=cmd_export)

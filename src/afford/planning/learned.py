@@ -127,7 +127,7 @@ def load_learned(weights: str | Path | None = None) -> tuple[Recognizer, Predict
 
     rec_path, pred_path = find_weights(weights)
     net, config, meta = load_net(rec_path)
-    threshold = meta.get("extra", {}).get("threshold")
+    threshold = meta.get("extra", {}).get("threshold")  # set by `afford export`
     tuned = rec_path.parent / THRESHOLD_FILE
     if threshold is None and tuned.is_file():
         threshold = json.loads(tuned.read_text())["threshold"]

@@ -104,3 +104,22 @@ def load_optimizer_state(
             state.setdefault(int(idx), {})[name] = value
     if meta.get("param_groups"):
         optimizer.load_state_dict({"state": state, "param_groups": meta["param_groups"]})
+
+
+def export_weights(
+    src: str | Path, dst: str | Path, kind: str, half: bool = True, extra: dict | None = None
+) -> int:
+    """A checkpoint's weights alone (no optimiser state), float16 by default, for shipping.
+
+    Returns the file size in bytes. `extra` is merged into the metadata (e.g. the tuned cut-off).
+    """
+    tensors, meta = read_checkpoint(src, kind)
+    out = {}
+    for k, v in tensors.items():
+        if k.startswith("model."):
+            out[k] = v.half() if half and v.is_floating_point() else v
+    meta = {**meta, "param_groups": [], "extra": {**(extra or {}), "exported_from": str(src)}}
+    dst = Path(dst)
+    dst.parent.mkdir(parents=True, exist_ok=True)
+    save_file(out, str(dst), metadata={"afford": json.dumps(meta)})
+    return dst.stat().st_size

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from afford.sim.affordances import TYPES
 
@@ -18,10 +18,10 @@ class RecognitionConfig:
     anchors: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)  # angle anchors, degrees
     types: tuple[str, ...] = TYPES
     image_size: int = 128
-    # Targets and losses.
+    # Targets and losses. The confidence target is 1 at assigned cells (the authors lower it
+    # with the regression error; a plain 1 trained well enough here).
     neighbours: bool = True  # a target also goes to the 2 nearest neighbour cells (YOLO)
     z_scale: float = 10.0  # z (metres) is regressed as z * z_scale
-    conf_from_error: bool = True  # confidence target falls with the position error (authors)
     w_conf: float = 1.0
     w_type: float = 0.5
     w_xy: float = 1.0
@@ -42,7 +42,6 @@ class RecognitionConfig:
     log_every: int = 25
     shift_px: int = 4
     threads: int = 2
-    extra: dict = field(default_factory=dict)
 
     @property
     def grid(self) -> int:

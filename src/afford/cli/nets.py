@@ -6,33 +6,23 @@ import json
 from pathlib import Path
 
 
-def cmd_train_recognition(args) -> int:
-    from afford.recognition.train import config_for, train
+def cmd_train(args) -> int:
+    """Train the net named by `args.net` with its preset and overrides."""
+    if args.net == "recognition":
+        from afford.recognition.train import config_for, train
 
-    config = config_for(args.preset, steps=args.steps, threads=args.threads)
+        config = config_for(args.preset, steps=args.steps, threads=args.threads)
+    else:
+        from afford.prediction.train import config_for, train
+
+        config = config_for(
+            args.preset, steps=args.steps, threads=args.threads, pixel_input=not args.no_affordance_pixel
+        )
     try:
         state = train(args.data, config, args.out, progress=not args.json)
     except KeyboardInterrupt:
         print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
         return 130
-    return _report_training(args, state)
-
-
-def cmd_train_prediction(args) -> int:
-    from afford.prediction.train import config_for, train
-
-    config = config_for(
-        args.preset, steps=args.steps, threads=args.threads, pixel_input=not args.no_affordance_pixel
-    )
-    try:
-        state = train(args.data, config, args.out, progress=not args.json)
-    except KeyboardInterrupt:
-        print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
-        return 130
-    return _report_training(args, state)
-
-
-def _report_training(args, state) -> int:
     record = {
         "run": str(args.out),
         "steps": state.step,
@@ -45,40 +35,31 @@ def _report_training(args, state) -> int:
     else:
         print(
             f"{args.out}: {state.step} steps in {state.seconds / 60:.1f} min, "
-            f"best val loss {state.best:.5f}; "
-            f"curves: {record['curves']}"
+            f"best val loss {state.best:.5f}; curves: {record['curves']}"
         )
     return 0
 
 
-def cmd_eval_recognition(args) -> int:
-    from afford.recognition.evaluate import evaluate, format_table
+# The paper's table each evaluation reproduces, and the folder its pictures go to.
+EVALS = {"recognition": ("table1.json", "detections"), "prediction": ("table2.json", "predictions")}
 
+
+def cmd_eval(args) -> int:
+    """Evaluate the run of the net named by `args.net`: its paper table and pictures."""
+    _check_run(args.run)
+    if args.net == "recognition":
+        from afford.recognition.evaluate import evaluate, format_table
+    else:
+        from afford.prediction.evaluate import evaluate, format_table
+    record, pictures = EVALS[args.net]
     result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
-    _write_result(args, result, "table1.json")
+    (Path(args.run) / record).write_text(json.dumps(result, indent=2) + "\n")
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         print(format_table(result))
-        print(f"pictures: {Path(args.run) / 'detections'}/; record: {Path(args.run) / 'table1.json'}")
+        print(f"pictures: {Path(args.run) / pictures}/; record: {Path(args.run) / record}")
     return 0
-
-
-def cmd_eval_prediction(args) -> int:
-    from afford.prediction.evaluate import evaluate, format_table
-
-    result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
-    _write_result(args, result, "table2.json")
-    if args.json:
-        print(json.dumps(result, indent=2))
-    else:
-        print(format_table(result))
-        print(f"pictures: {Path(args.run) / 'predictions'}/; record: {Path(args.run) / 'table2.json'}")
-    return 0
-
-
-def _write_result(args, result: dict, name: str) -> None:
-    (Path(args.run) / name).write_text(json.dumps(result, indent=2) + "\n")
 
 
 def _check_run(run: str) -> None:
@@ -139,7 +120,7 @@ def add_parsers(sub) -> None:
                 action="store_true",
                 help="leave the affordance pixel's RGBD out of the action vector (Table 2 ablation)",
             )
-        p.set_defaults(func=cmd_train_recognition if net == "recognition" else cmd_train_prediction)
+        p.set_defaults(func=cmd_train)
 
     e = sub.add_parser("eval", help="evaluate a trained net", description="Evaluate a trained net.")
     esub = e.add_subparsers(dest="net", required=True)
@@ -158,14 +139,14 @@ def add_parsers(sub) -> None:
         "over the pixels that changed, mean (sd), on test and 500 training sequences. Writes Fig. 7-style "
         "pictures of non-canonical effects to RUN/predictions/.",
     )
-    for q, func in ((r, cmd_eval_recognition), (p, cmd_eval_prediction)):
+    for q in (r, p):
         q.add_argument("--run", required=True, metavar="RUN")
         q.add_argument("--data", required=True, metavar="DIR")
         q.add_argument(
             "--checkpoint", default="best.safetensors", help="file in RUN (default best.safetensors)"
         )
         q.add_argument("--json", action="store_true")
-        q.set_defaults(func=lambda a, f=func: (_check_run(a.run), f(a))[1])
+        q.set_defaults(func=cmd_eval)
 
     x = sub.add_parser(
         "export",

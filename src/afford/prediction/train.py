@@ -86,10 +86,6 @@ def train(
         batches=loader,
         train_step=train_step,
         validate=validate,
-        steps=config.steps,
-        eval_every=config.eval_every,
-        log_every=config.log_every,
-        base_lr=config.lr,
         patience=config.patience,
     )
     return run(loop, run_dir, progress)

@@ -80,10 +80,6 @@ def train(
         batches=loader,
         train_step=train_step,
         validate=validate,
-        steps=config.steps,
-        eval_every=config.eval_every,
-        log_every=config.log_every,
-        base_lr=config.lr,
         lr_at=warmup_cosine(config.warmup, config.steps),
     )
     return run(loop, run_dir, progress)

@@ -40,16 +40,12 @@ class LoopState:
 @dataclass
 class Loop:
     kind: str  # "recognition" or "prediction"
-    config: object  # the net's config dataclass
+    config: object  # the net's config dataclass: steps, eval_every, log_every and lr come from it
     model: nn.Module
     optimizer: torch.optim.Optimizer
     batches: Iterable  # one epoch of batches; iterated again as needed
     train_step: Callable[[object], tuple[torch.Tensor, dict[str, float]]]
     validate: Callable[[], dict[str, float]]  # must contain "loss"
-    steps: int
-    eval_every: int
-    log_every: int
-    base_lr: float
     lr_at: Callable[[int], float] | None = None  # lr multiplier by step (warm-up, cosine)
     patience: int | None = None  # halve the lr after this many evaluations without improvement
 
@@ -89,7 +85,7 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
     def set_lr() -> None:
         scale = state.lr_scale * (loop.lr_at(state.step) if loop.lr_at else 1.0)
         for g in loop.optimizer.param_groups:
-            g["lr"] = loop.base_lr * scale
+            g["lr"] = loop.config.lr * scale
 
     def evaluate() -> None:
         loop.model.eval()
@@ -111,13 +107,17 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
         log.plot(f"{loop.kind}: {run_dir.name}")
 
     bar = tqdm(
-        total=loop.steps, initial=state.step, disable=not progress, desc=f"train {loop.kind}", unit="step"
+        total=loop.config.steps,
+        initial=state.step,
+        disable=not progress,
+        desc=f"train {loop.kind}",
+        unit="step",
     )
     loop.model.train()
     batches = _forever(loop.batches)
     t0, running = time.perf_counter(), {}
     try:
-        while state.step < loop.steps:
+        while state.step < loop.config.steps:
             batch = next(batches)
             set_lr()
             loss, parts = loop.train_step(batch)
@@ -127,13 +127,13 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
             state.step += 1
             for k, v in {"loss": float(loss.detach()), **parts}.items():
                 running[k] = running.get(k, 0.0) + v
-            if state.step % loop.log_every == 0:
-                n = loop.log_every
+            if state.step % loop.config.log_every == 0:
+                n = loop.config.log_every
                 log.add(state.step, {f"train/{k}": v / n for k, v in running.items()} | {"lr": _lr(loop)})
                 bar.set_postfix(loss=f"{running['loss'] / n:.4f}")
                 running = {}
             bar.update(1)
-            if state.step % loop.eval_every == 0 or state.step == loop.steps:
+            if state.step % loop.config.eval_every == 0 or state.step == loop.config.steps:
                 state.seconds += time.perf_counter() - t0
                 t0 = time.perf_counter()
                 evaluate()

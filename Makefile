@@ -31,8 +31,12 @@ lint: install
 
 bench: install
 	$(PY) benchmarks/sim_speed.py
-	$(VENV)/bin/afford bench tasks --planner symbolic
-	$(VENV)/bin/afford bench tasks --planner oracle
+	$(PY) benchmarks/generate_speed.py
+	$(PY) benchmarks/recognition_speed.py
+	$(PY) benchmarks/prediction_speed.py
+	$(PY) benchmarks/learned_planning.py
+	$(VENV)/bin/afford bench tasks --planner all
+	$(VENV)/bin/afford bench random --n 50 --seed 0 --planner all
 
 clean:
 	rm -rf $(VENV) out

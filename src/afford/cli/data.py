@@ -137,7 +137,7 @@ def cmd_data_show(args) -> int:
 def cmd_data_verify(args) -> int:
     from afford.data.format import verify
 
-    problems, good = verify(args.dir)
+    problems, good = verify(args.dir, progress=not args.json)
     if args.json:
         print(json.dumps({"good_shards": good, "problems": problems}, indent=2))
     else:

@@ -313,15 +313,17 @@ def shard_summary(path: Path) -> dict[str, np.ndarray]:
         raise DataError(f"{path}: corrupt shard ({type(e).__name__}: {e})") from None
 
 
-def verify(root: str | Path) -> tuple[list[str], int]:
+def verify(root: str | Path, progress: bool = False) -> tuple[list[str], int]:
     """Read every shard in full (zip CRCs, array consistency, sequence indices).
 
     Returns (problems, good shard count); a problem is one line naming a shard.
     """
     root = Path(root)
     manifest = read_manifest(root)
+    from tqdm import tqdm
+
     problems, good = [], 0
-    for k in range(manifest.n_shards):
+    for k in tqdm(range(manifest.n_shards), desc="verify", unit="shard", disable=not progress, leave=False):
         path = shard_path(root, k)
         if not path.is_file():
             problems.append(f"{path}: shard missing (re-run the same `afford generate` to make it)")

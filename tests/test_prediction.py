@@ -127,4 +127,4 @@ def test_loss_falls_on_a_tiny_batch():
         loss.backward()
         opt.step()
         losses.append(float(loss.detach()))
-    assert losses[-1] < 0.3 * losses[0]
+    assert losses[-1] < 0.5 * losses[0]

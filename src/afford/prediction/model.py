@@ -18,6 +18,9 @@ from afford.sim.camera import FOCAL_PX, SIZE
 from afford.sim.constants import CAMERA
 
 
+MASK_BIAS = -3.0  # unit_tanh(-3) = 0.0025
+
+
 def normalise_latent(a: torch.Tensor) -> torch.Tensor:
     """The authors' latent normalisation: a / sqrt(1 + sum a^2), keeping the norm below 1."""
     return a / torch.sqrt(1 + (a * a).sum(-1, keepdim=True))
@@ -68,6 +71,10 @@ class Decoder(nn.Module):
             nn.Upsample(scale_factor=2, mode="nearest"),
             nn.Conv2d(k, c.channels + 1, 3, 1, 1),
         )
+        # Start with the mask nearly closed, so eq. (3) first copies the current state and
+        # training only has to open it where things change.
+        with torch.no_grad():
+            self.up[-1].bias[-1] = MASK_BIAS
 
     def forward(self, dc: torch.Tensor) -> torch.Tensor:
         x = self.dense(dc).view(-1, *self.shape).contiguous(memory_format=torch.channels_last)

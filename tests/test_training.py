@@ -63,3 +63,26 @@ def test_resume_with_another_architecture_is_one_line(small_dataset, tmp_path, c
 def test_eval_of_a_missing_run(small_dataset, tmp_path, capsys):
     assert main(["eval", "recognition", "--run", str(tmp_path / "none"), "--data", str(small_dataset)]) == 2
     assert "no such run" in capsys.readouterr().err
+
+
+def test_sigterm_saves_a_checkpoint_and_resume_continues(small_dataset, tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    run = tmp_path / "run"
+    cmd = [sys.executable, "-m", "afford.cli.main", "train", "recognition", "--data", str(small_dataset)]
+    cmd += ["--preset", "tiny", "--out", str(run), "--threads", "1", "--steps", "100000"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    deadline = time.time() + 120
+    while not (run / "log.jsonl").exists() and time.time() < deadline:
+        time.sleep(0.1)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and b"run the same command again" in out
+    from afford.training.checkpoint import read_checkpoint
+
+    _, meta = read_checkpoint(run / "last.safetensors", "recognition")
+    assert meta["step"] > 0

@@ -17,7 +17,6 @@ from afford.prediction.config import PredictionConfig
 from afford.sim.camera import FOCAL_PX, SIZE
 from afford.sim.constants import CAMERA
 
-
 MASK_BIAS = -3.0  # unit_tanh(-3) = 0.0025
 
 

@@ -8,6 +8,7 @@ lowest validation loss. RUN/config.json holds the config for people to read.
 from __future__ import annotations
 
 import json
+import signal
 import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import asdict, dataclass, field
@@ -106,6 +107,9 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
             save(BEST)
         log.plot(f"{loop.kind}: {run_dir.name}")
 
+    # `kill` (SIGTERM) stops like Ctrl-C, saving a checkpoint first; a background job started
+    # from a script ignores SIGINT, so this is how such a run is stopped cleanly.
+    previous = signal.signal(signal.SIGTERM, _interrupt)
     bar = tqdm(
         total=loop.config.steps,
         initial=state.step,
@@ -140,12 +144,16 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
     except KeyboardInterrupt:
         state.seconds += time.perf_counter() - t0
         save(LAST)
+        raise
+    finally:
+        signal.signal(signal.SIGTERM, previous)
         bar.close()
         log.close()
-        raise
-    bar.close()
-    log.close()
     return state
+
+
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
 
 
 def _lr(loop: Loop) -> float:

@@ -30,6 +30,7 @@ from afford.data.format import (
 )
 from afford.sim.affordances import parametrise
 from afford.sim.layout import LayoutConfig, random_layout
+from afford.sim.mjcf import slot_names
 from afford.sim.scene import Scene
 
 
@@ -129,8 +130,7 @@ def _shard_job(job: tuple[str, int, int, int, int, int]) -> tuple[int, int, int,
 def _manifest_for(config: GenerateConfig) -> Manifest:
     from afford import __version__
 
-    with Scene() as scene:
-        slots = [name for name, _ in scene.slots]
+    slots = [name for name, _ in slot_names()]
     return Manifest(
         sequences=config.sequences,
         seed=config.seed,

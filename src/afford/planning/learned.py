@@ -93,7 +93,6 @@ class LearnedModel:
         return [(images[k], LatentState(latent[k], memory[k])) for k in range(len(parents))]
 
     def _predict_from_root(self, parents: list[Node], actions: list[Affordance]):
-        out = []
         by_depth: dict[int, list[int]] = {}
         for k, p in enumerate(parents):
             by_depth.setdefault(p.depth, []).append(k)
@@ -111,8 +110,7 @@ class LearnedModel:
             images = image.permute(0, 2, 3, 1).numpy()
             for j, k in enumerate(ks):
                 results[k] = (images[j], LatentState(latent[j], memory[j]))
-        out = [results[k] for k in range(len(parents))]
-        return out
+        return [results[k] for k in range(len(parents))]
 
     @staticmethod
     def _tensor(images) -> torch.Tensor:

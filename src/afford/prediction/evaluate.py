@@ -16,7 +16,7 @@ from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
 from afford.prediction.config import PredictionConfig
 from afford.prediction.model import PredictionNet
-from afford.training.checkpoint import CheckpointError, load_model_state, read_checkpoint
+from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "prediction"
 CHANGED = 0.02  # a ground-truth pixel changed when a channel moved by more than this
@@ -25,17 +25,8 @@ BATCH = 32
 
 
 def load_net(path: str | Path) -> tuple[PredictionNet, PredictionConfig]:
-    tensors, meta = read_checkpoint(path, KIND)
-    fields = PredictionConfig.__dataclass_fields__
-    try:
-        config = PredictionConfig(
-            **{k: tuple(v) if isinstance(v, list) else v for k, v in meta["config"].items() if k in fields}
-        )
-        net = PredictionNet(config)
-    except (TypeError, ValueError, KeyError) as e:
-        raise CheckpointError(f"{path}: unusable prediction config ({e})") from None
-    load_model_state(net, tensors, path)
-    return net.eval(), config
+    net, config, _ = load_net_from_checkpoint(path, KIND, PredictionConfig, PredictionNet)
+    return net, config
 
 
 @torch.no_grad()

@@ -12,28 +12,14 @@ import torch
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import Detection, decode, suppress
-from afford.training.checkpoint import CheckpointError, load_model_state, read_checkpoint
+from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "recognition"
 THRESHOLD_FILE = "threshold.json"  # written by `afford eval recognition` (tuned on val)
 
 
-def config_from_dict(d: dict) -> RecognitionConfig:
-    fields = RecognitionConfig.__dataclass_fields__
-    clean = {k: tuple(v) if isinstance(v, list) else v for k, v in d.items() if k in fields}
-    return RecognitionConfig(**clean)
-
-
 def load_net(path: str | Path) -> tuple[RecognitionNet, RecognitionConfig, dict]:
-    tensors, meta = read_checkpoint(path, KIND)
-    try:
-        config = config_from_dict(meta["config"])
-        net = RecognitionNet(config)
-    except (TypeError, ValueError, KeyError) as e:
-        raise CheckpointError(f"{path}: unusable recognition config ({e})") from None
-    load_model_state(net, tensors, path)
-    net.eval()
-    return net, config, meta
+    return load_net_from_checkpoint(path, KIND, RecognitionConfig, RecognitionNet)
 
 
 class Recognizer:

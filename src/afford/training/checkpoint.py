@@ -123,3 +123,24 @@ def export_weights(
     dst.parent.mkdir(parents=True, exist_ok=True)
     save_file(out, str(dst), metadata={"afford": json.dumps(meta)})
     return dst.stat().st_size
+
+
+def load_net_from_checkpoint(
+    path: str | Path, kind: str, config_cls, net_cls
+) -> tuple[nn.Module, object, dict]:
+    """(net in eval mode, its config, metadata) rebuilt from a checkpoint of `kind`.
+
+    The config comes from the checkpoint itself (JSON lists back to tuples; unknown keys, from
+    an older or newer afford, are ignored), so a net always loads with the shape it was trained at.
+    """
+    tensors, meta = read_checkpoint(path, kind)
+    fields = config_cls.__dataclass_fields__
+    try:
+        config = config_cls(
+            **{k: tuple(v) if isinstance(v, list) else v for k, v in meta["config"].items() if k in fields}
+        )
+        net = net_cls(config)
+    except (TypeError, ValueError, KeyError) as e:
+        raise CheckpointError(f"{path}: unusable {kind} config ({e})") from None
+    load_model_state(net, tensors, path)
+    return net.eval(), config, meta

@@ -8,7 +8,13 @@ import torch
 
 from afford.data.format import encode_affordance
 from afford.prediction.config import PRESETS
-from afford.prediction.model import PredictionNet, affordance_pixel, apply_difference, normalise_latent
+from afford.prediction.model import (
+    PredictionNet,
+    affordance_pixel,
+    apply_difference,
+    clamped_tanh,
+    normalise_latent,
+)
 from afford.prediction.train import sequence_loss
 from afford.sim import camera
 from afford.sim.affordances import Affordance
@@ -50,6 +56,15 @@ def test_eq3_mask_zero_keeps_mask_one_takes():
     assert torch.equal(keep, state) and torch.allclose(take, new)
     half = apply_difference(state, torch.cat([new, torch.full((2, 1, 8, 8), 0.5)], 1))
     assert torch.allclose(half, (state + new) / 2)
+
+
+def test_clamped_tanh_closes_exactly_and_still_passes_a_gradient():
+    x = torch.tensor([-3.0, -0.1, 0.5, 4.0], requires_grad=True)
+    y = clamped_tanh(x)
+    assert y[0] == 0 and y[1] == 0 and torch.isclose(y[2], torch.tanh(torch.tensor(0.5)))
+    y.sum().backward()
+    # A closed mask pixel (x < 0) must still be able to open: tanh's gradient, not zero.
+    assert torch.allclose(x.grad, 1 - torch.tanh(x.detach()) ** 2, atol=1e-6)
 
 
 def test_each_example_goes_through_its_own_type_module():

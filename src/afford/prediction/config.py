@@ -26,8 +26,8 @@ class PredictionConfig:
     optimizer: str = "adam"  # "signsgd" as the paper, or "adam"
     lr: float = 1e-3
     batch_size: int = 32
-    steps: int = 6000
-    eval_every: int = 500
+    steps: int = 3000
+    eval_every: int = 250
     log_every: int = 25
     patience: int = 5  # halve the lr after this many evaluations without improvement (paper)
     max_steps: int = 4  # executions per training run (1-4, random start)
@@ -53,7 +53,7 @@ class PredictionConfig:
 
 
 PRESETS = {
-    # Smaller dense layers and a schedule of 6k batches: about an hour on 2 CPU cores. Adam,
+    # Smaller dense layers and a schedule of 3k batches: about an hour on 2 CPU cores. Adam,
     # because SignSGD at the paper's rate needs the paper's million batches.
     "cpu": PredictionConfig(),
     # The paper's sizes (II.C; the authors' public configuration for the P modules) and schedule.

@@ -17,7 +17,9 @@ from afford.prediction.config import PredictionConfig
 from afford.sim.camera import FOCAL_PX, SIZE
 from afford.sim.constants import CAMERA
 
-MASK_BIAS = -3.0  # unit_tanh(-3) = 0.0025
+# D's mask starts a little open (clamped tanh(0.15) = 0.15): fully closed, neither the mask nor
+# the difference image would get a gradient (eq. 3 multiplies one by the other).
+MASK_BIAS = 0.15
 
 
 def normalise_latent(a: torch.Tensor) -> torch.Tensor:
@@ -25,9 +27,15 @@ def normalise_latent(a: torch.Tensor) -> torch.Tensor:
     return a / torch.sqrt(1 + (a * a).sum(-1, keepdim=True))
 
 
-def unit_tanh(x: torch.Tensor) -> torch.Tensor:
-    """tanh rescaled into [0, 1]: D's outputs are images and a mask."""
-    return 0.5 * (torch.tanh(x) + 1)
+def clamped_tanh(x: torch.Tensor) -> torch.Tensor:
+    """tanh clamped to [0, 1] (the authors' D output), with tanh's gradient through the clamp.
+
+    The clamp lets the mask be exactly 0, so eq. (3) copies unchanged pixels exactly; passing
+    the gradient straight through it keeps a closed mask able to open again where a change
+    appears (a plain clamp would leave it dead).
+    """
+    t = torch.tanh(x)
+    return t + (t.clamp(0.0, 1.0) - t).detach()
 
 
 class Encoder(nn.Module):
@@ -70,14 +78,12 @@ class Decoder(nn.Module):
             nn.Upsample(scale_factor=2, mode="nearest"),
             nn.Conv2d(k, c.channels + 1, 3, 1, 1),
         )
-        # Start with the mask nearly closed, so eq. (3) first copies the current state and
-        # training only has to open it where things change.
         with torch.no_grad():
             self.up[-1].bias[-1] = MASK_BIAS
 
     def forward(self, dc: torch.Tensor) -> torch.Tensor:
         x = self.dense(dc).view(-1, *self.shape).contiguous(memory_format=torch.channels_last)
-        return unit_tanh(self.up(x))
+        return clamped_tanh(self.up(x))
 
 
 class PModule(nn.Module):

@@ -89,6 +89,9 @@ def evaluate(
 
 
 # ---------------------------------------------------------------------------- pictures
+EVENTS = ("falls off the table", "cup topples", "cup turns with the block", "ball rolls away")
+
+
 def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]]:
     """The first (sequence, step) of each non-canonical effect, found from the true poses."""
     found: dict[str, tuple[int, int]] = {}
@@ -105,14 +108,16 @@ def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]
                     if _upright(before[k]) and not _upright(after[k]) and "cup topples" not in found:
                         found["cup topples"] = (i, t)
                     moved = np.linalg.norm(after[k, :2] - before[k, :2]) > 0.03
-                    if (
-                        act.type == "turn"
-                        and moved
-                        and before[k, 2] > 0.06
-                        and "cup turns with the block" not in found
-                    ):
+                    # Carried round on the block: raised before and after, still upright (a cup
+                    # flung off by the turn lands on the table or on its side).
+                    carried = before[k, 2] > 0.06 and after[k, 2] > 0.06 and _upright(after[k])
+                    if act.type == "turn" and moved and carried and "cup turns with the block" not in found:
                         found["cup turns with the block"] = (i, t)
-        if len(found) == 3:
+                untouched = seq.held[t] != k and seq.held[t + 1] != k
+                if slot.startswith("ball") and was and now and untouched and "ball rolls away" not in found:
+                    if np.linalg.norm(after[k, :2] - before[k, :2]) > 0.05:
+                        found["ball rolls away"] = (i, t)
+        if len(found) == len(EVENTS):
             break
     return found
 

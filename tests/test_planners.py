@@ -90,3 +90,18 @@ def test_bench_tasks_cli_tables_a_folder(tmp_path):
     assert table["tasks"][0]["planning_seconds"] >= 0
     empty = afford("bench", "tasks", "--tasks", str(tmp_path / "none"))
     assert empty.returncode == 2 and "no task files" in empty.stderr
+
+
+def test_random_tasks_are_not_solved_by_doing_nothing(scene):
+    from afford.planning.oracle import execute_plan
+    from afford.planning.random_tasks import random_task
+
+    made = [t for t in (random_task(scene, seed, max_steps=2) for seed in range(4)) if t is not None]
+    assert made
+    for task in made:
+        scene.reset(task.scene)
+        assert not task.success.holds(scene)  # the start is not already the goal
+        assert task.goal.patch.shape[0] >= 16 and task.goal.patch.shape[2] == 4
+        # The root image is scored against the goal like any other state: a finite loss.
+        assert np.isfinite(task.goal.loss(scene.observe()[None])[0])
+        assert execute_plan(scene, task.scene, (), task.success).success is False

@@ -5,8 +5,9 @@ import json
 import mujoco
 import numpy as np
 import pytest
+from scenarios import do
 
-from afford.sim.affordances import parametrise
+from afford.sim.affordances import Affordance, parametrise
 from afford.sim.camera import pixel_to_world, world_to_pixel
 from afford.sim.layout import random_layout
 from afford.sim.scene import ObjectSpec as O
@@ -84,3 +85,43 @@ def test_pixel_world_round_trip_and_projection_of_a_ball(scene):
     top = scene.object("ball0").pos + [0, 0, 0.025]
     z = pixel_to_world(np.array([col + 0.5, row + 0.5]), image[row, col, 3])[2]
     assert abs(z - top[2]) < 0.005  # depth reads the ball's top
+
+
+ROBOT_BODIES = ("link1", "link2", "link3", "link4", "link5", "link6", "hand", "finger_l", "finger_r")
+
+
+def _arm_region(scene) -> np.ndarray:
+    """The pixels around the arm at home: its bounding box in the image, 4 px wider each way."""
+    robot = [scene.model.body(n).id for n in ROBOT_BODIES]
+    rows, cols = np.nonzero(np.isin(scene._cam().segment(scene.data), robot))
+    region = np.zeros((128, 128), dtype=bool)
+    region[max(0, rows.min() - 4) : rows.max() + 5, max(0, cols.min() - 4) : cols.max() + 5] = True
+    return region
+
+
+def _objects_seen(scene) -> np.ndarray:
+    """Pixels showing an object, grown by 2 px: edge pixels blend the colours either side."""
+    objects = [scene.body_id(n) for n, _ in scene.slots]
+    seen = np.isin(scene._cam().segment(scene.data), objects)
+    grown = seen.copy()
+    for dr in range(-2, 3):
+        for dc in range(-2, 3):
+            grown |= np.roll(seen, (dr, dc), (0, 1))
+    return grown
+
+
+def test_home_pose_renders_identically_after_any_execution(scene):
+    # Two different scenes: one fresh, one after a grasp, a failed grasp and a place. With
+    # nothing held, every pixel around the arm that shows no object must be identical.
+    scene.reset([O.upright("cup", 0.12, 0.30), O.upright("support", -0.12, 0.32)])
+    fresh, fresh_objects, region = scene.observe(), _objects_seen(scene), _arm_region(scene)
+    scene.reset([O.upright("ball", -0.05, 0.36), O.upright("support", 0.10, 0.28), O.upright("block", 0, 0.42)])
+    air = scene.execute(Affordance("grasp", (-0.2, 0.40, 0.03), 30.0, True))  # the fingers close on air
+    assert air.executed and scene.held is None
+    do(scene, "grasp", (-0.05, 0.36))
+    do(scene, "place", (0.10, 0.28))
+    assert scene.held is None
+    after = scene.observe()
+    compare = region & ~fresh_objects & ~_objects_seen(scene)
+    assert compare.sum() > 200
+    np.testing.assert_array_equal(after[compare], fresh[compare])

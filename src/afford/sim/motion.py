@@ -164,6 +164,13 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
     yaw_now = scene.kin.yaw_of(scene.data.site_xmat[scene.model.site("tcp").id].reshape(3, 3))
     if not arm.line(up, yaw_now, MOTION.t_approach):
         arm.move(q_high, MOTION.t_approach)
-    arm.move(scene.home_q, MOTION.t_travel)
+    # Home with the fingers at one opening for each gripper state (open when empty, whatever
+    # a failed grasp left them at), and the joints exactly at home: joint 6 took the short
+    # way round, which may differ from home by whole turns.
+    fingers_home = 1.0 if scene.held is None else _finger_fraction(scene.kind_of[scene.held])
+    arm.move(scene.home_q, MOTION.t_travel, fingers=fingers_home)
+    scene.set_arm(scene.home_q, fingers_home)
+    if scene.held is not None:
+        scene.carry_held()
     scene.settle()
     return ExecutionResult(aff, True, scene.held, scene.steps - start, message)

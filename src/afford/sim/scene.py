@@ -244,13 +244,26 @@ class Scene:
         return False
 
     def settle(self) -> int:
-        """Step until every object on the table rests, at most `settle_max_steps`. Returns steps taken."""
+        """Step until every object on the table rests, at most `settle_max_steps`. Returns steps taken.
+
+        The arm is held exactly where it is: left to the integrator, its joints and fingers
+        drift while objects settle (by up to ~0.1 rad), so the arm at its default pose would
+        render differently from state to state, noise that a prediction net is asked to learn.
+        """
+        q = self.data.qpos[self._arm_slice].copy()
+        fingers = self.data.qpos[self._finger_slice].copy()
         taken = 0
         while taken < PHYSICS.settle_max_steps:
-            self.step(PHYSICS.settle_check_every)
+            for _ in range(PHYSICS.settle_check_every):
+                self.step()
+                self.data.qpos[self._arm_slice] = q
+                self.data.qvel[self._arm_vslice] = 0.0
+                self.data.qpos[self._finger_slice] = fingers
+                self.data.qvel[self._finger_vslice] = 0.0
             taken += PHYSICS.settle_check_every
             if not self.moving():
                 break
+        mujoco.mj_forward(self.model, self.data)
         return taken
 
     # ------------------------------------------------------------------ holding

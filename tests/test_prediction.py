@@ -71,20 +71,25 @@ def test_each_example_goes_through_its_own_type_module():
     torch.manual_seed(0)
     net = PredictionNet(TINY).eval()
     image = torch.rand(1, 4, 128, 128)
-    latent = net.encoder(image)
-    memory = torch.zeros_like(latent)
+    latent, memory = net.encode(image)
     grasp = actions(Affordance("grasp", (0, 0.3, 0.02), 0, True))
     turn = actions(Affordance("turn", (0, 0.3, 0.02), 0, False, 90))
     with torch.no_grad():
         batch = net.step(
-            latent.repeat(2, 1), memory.repeat(2, 1), image.repeat(2, 1, 1, 1), torch.cat([grasp, turn])
+            torch.cat([latent] * 2),
+            torch.cat([memory] * 2),
+            image.repeat(2, 1, 1, 1),
+            torch.cat([grasp, turn]),
         )
         alone = net.step(latent, memory, image, turn)
         # Silence the turn module: only the turn example may change.
         for p in net.modules_by_type[2].parameters():
             p.zero_()
         silenced = net.step(
-            latent.repeat(2, 1), memory.repeat(2, 1), image.repeat(2, 1, 1, 1), torch.cat([grasp, turn])
+            torch.cat([latent] * 2),
+            torch.cat([memory] * 2),
+            image.repeat(2, 1, 1, 1),
+            torch.cat([grasp, turn]),
         )
     assert torch.allclose(batch[0][1], alone[0][0], atol=1e-6)  # mixed batch == one at a time
     assert torch.allclose(silenced[0][0], batch[0][0], atol=1e-6)
@@ -118,28 +123,50 @@ def test_signsgd_moves_each_weight_by_lr_against_its_gradient_sign():
         SignSGD([w], lr=0)
 
 
-def test_loss_falls_on_a_tiny_batch():
+@pytest.mark.parametrize("preset", ["tiny", "tiny-dense"])
+def test_loss_falls_on_a_tiny_batch(preset):
     torch.manual_seed(0)
-    net = PredictionNet(TINY)
-    # A grey table; the first action puts a bright square down, the second a dark one.
-    images = torch.full((2, 3, 4, 128, 128), 0.5)
-    images[:, 1:, :, 40:60, 40:60] = 0.9
-    images[:, 2:, :, 70:90, 70:90] = 0.1
-    acts = torch.stack(
-        [
-            actions(
-                Affordance("grasp", (0, 0.3, 0.02), 0, True), Affordance("place", (0.1, 0.3, 0.06), 0, True)
-            )
-        ]
-        * 2
+    net = PredictionNet(PRESETS[preset])
+    grasp, place = (
+        Affordance("grasp", (0, 0.3, 0.02), 0, True),
+        Affordance("place", (0.1, 0.3, 0.06), 0, True),
     )
+    # A grey table; the grasp puts a bright square down where it acts, the place a dark one.
+    images = torch.full((2, 3, 4, 128, 128), 0.5)
+    for k, (a, value) in enumerate(((grasp, 0.9), (place, 0.1))):
+        r, c = camera.pixel_index(np.array(a.position))
+        images[:, k + 1 :, :, r - 10 : r + 10, c - 10 : c + 10] = value
+    acts = torch.stack([actions(grasp, place)] * 2)
     steps = torch.tensor([2, 1])
     opt = torch.optim.Adam(net.parameters(), lr=1e-2)
     losses = []
-    for _ in range(30):
+    for _ in range(40):
         loss = sequence_loss(net, images, acts, steps)
         opt.zero_grad()
         loss.backward()
         opt.step()
         losses.append(float(loss.detach()))
     assert losses[-1] < 0.5 * losses[0]
+
+
+def test_spatial_action_maps_peak_at_the_affordance_pixel():
+    from afford.prediction.spatial import action_maps
+
+    net = PredictionNet(TINY)
+    a = Affordance("turn", (0.07, 0.33, 0.025), 30.0, False, -90)
+    rows = actions(a)
+    image = torch.rand(1, 4, 128, 128)
+    vector = net.action_vector(rows, image)
+    pixel = camera.world_to_pixel(rows[:, 1:4])
+    maps = action_maps(vector, pixel, 16, 0.8)[0]  # (channels, 16, 16)
+    blob = maps[0]
+    row, col = divmod(int(blob.argmax()), 16)
+    assert (row, col) == (int(pixel[0, 1]) // 8, int(pixel[0, 0]) // 8)
+    assert blob.max() > 0.6 and blob[0, 0] < 1e-3  # a peak there, nothing far away
+    # Each value map is the blob times its value: cos/sin of the angle, the turn, the pixel's RGBD.
+    at = maps[:, row, col] / blob[row, col]
+    assert torch.allclose(
+        at[1:3], torch.tensor([np.cos(np.radians(30)), np.sin(np.radians(30))]).float(), atol=1e-5
+    )
+    assert torch.isclose(at[5], torch.tensor(-1.0))
+    assert torch.allclose(at[7:], affordance_pixel(image, rows[:, 1:4])[0])

@@ -115,7 +115,9 @@ def test_home_pose_renders_identically_after_any_execution(scene):
     # nothing held, every pixel around the arm that shows no object must be identical.
     scene.reset([O.upright("cup", 0.12, 0.30), O.upright("support", -0.12, 0.32)])
     fresh, fresh_objects, region = scene.observe(), _objects_seen(scene), _arm_region(scene)
-    scene.reset([O.upright("ball", -0.05, 0.36), O.upright("support", 0.10, 0.28), O.upright("block", 0, 0.42)])
+    scene.reset(
+        [O.upright("ball", -0.05, 0.36), O.upright("support", 0.10, 0.28), O.upright("block", 0, 0.42)]
+    )
     air = scene.execute(Affordance("grasp", (-0.2, 0.40, 0.03), 30.0, True))  # the fingers close on air
     assert air.executed and scene.held is None
     do(scene, "grasp", (-0.05, 0.36))

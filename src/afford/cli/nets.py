@@ -45,20 +45,35 @@ EVALS = {"recognition": ("table1.json", "detections"), "prediction": ("table2.js
 
 
 def cmd_eval(args) -> int:
-    """Evaluate the run of the net named by `args.net`: its paper table and pictures."""
-    _check_run(args.run)
+    """Evaluate a trained net: its paper table and pictures.
+
+    Prediction without --run evaluates the weights shipped in the package, writing to --out.
+    """
     if args.net == "recognition":
         from afford.recognition.evaluate import evaluate, format_table
+
+        _check_run(args.run)
+        result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
+        folder = Path(args.run)
     else:
         from afford.prediction.evaluate import evaluate, format_table
+
+        if args.run is None:
+            from afford.planning.learned import PREDICTION_FILE, WEIGHTS
+
+            checkpoint, folder = WEIGHTS / PREDICTION_FILE, Path(args.out)
+        else:
+            _check_run(args.run)
+            checkpoint, folder = Path(args.run) / args.checkpoint, Path(args.run)
+        folder.mkdir(parents=True, exist_ok=True)
+        result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1])
     record, pictures = EVALS[args.net]
-    result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
-    (Path(args.run) / record).write_text(json.dumps(result, indent=2) + "\n")
+    (folder / record).write_text(json.dumps(result, indent=2) + "\n")
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         print(format_table(result))
-        print(f"pictures: {Path(args.run) / pictures}/; record: {Path(args.run) / record}")
+        print(f"pictures: {folder / pictures}/; record: {folder / record}")
     return 0
 
 
@@ -92,6 +107,12 @@ def cmd_export(args) -> int:
     return 0
 
 
+PRESET_NAMES = {
+    "recognition": ("cpu", "paper", "tiny"),
+    "prediction": ("cpu", "dense-cpu", "paper", "tiny", "tiny-dense"),
+}
+
+
 def add_parsers(sub) -> None:
     t = sub.add_parser("train", help="train a net", description="Train the recognition or prediction net.")
     tsub = t.add_subparsers(dest="net", required=True)
@@ -109,7 +130,7 @@ def add_parsers(sub) -> None:
             "curves in RUN/curves.png.",
         )
         p.add_argument("--data", required=True, metavar="DIR", help="a dataset made by `afford generate`")
-        p.add_argument("--preset", choices=("cpu", "paper", "tiny"), default="cpu")
+        p.add_argument("--preset", choices=PRESET_NAMES[net], default="cpu")
         p.add_argument("--out", required=True, metavar="RUN", help="run folder (checkpoints, logs)")
         p.add_argument("--steps", type=int, help="override the preset's number of batches")
         p.add_argument("--threads", type=int, help="torch threads (default: the preset's)")
@@ -136,11 +157,18 @@ def add_parsers(sub) -> None:
         "prediction",
         help="the paper's Table 2",
         description="The paper's Table 2: mean absolute RGBD error per step (1-4) over all pixels and "
-        "over the pixels that changed, mean (sd), on test and 500 training sequences. Writes Fig. 7-style "
-        "pictures of non-canonical effects to RUN/predictions/.",
+        "over the pixels that changed (by more than 0.02, and at all), mean (sd), on test and 500 training "
+        "sequences, beside copying the input. Writes Fig. 7-style pictures of canonical and non-canonical "
+        "effects to RUN/predictions/.",
+    )
+    r.add_argument("--run", required=True, metavar="RUN")
+    p.add_argument(
+        "--run", metavar="RUN", help="a training run (default: the weights shipped in the package)"
+    )
+    p.add_argument(
+        "--out", default="out/eval-prediction", metavar="DIR", help="where results go without --run"
     )
     for q in (r, p):
-        q.add_argument("--run", required=True, metavar="RUN")
         q.add_argument("--data", required=True, metavar="DIR")
         q.add_argument(
             "--checkpoint", default="best.safetensors", help="file in RUN (default best.safetensors)"

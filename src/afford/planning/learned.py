@@ -30,8 +30,8 @@ PREDICTION_FILE = "prediction.safetensors"
 
 @dataclass
 class LatentState:
-    latent: torch.Tensor  # (latent,)
-    memory: torch.Tensor  # (latent,)
+    latent: torch.Tensor  # c_i: (latent,) for the dense net, (channels, 16, 16) for the spatial one
+    memory: torch.Tensor  # the memory trace, shaped likewise
 
 
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
@@ -72,8 +72,8 @@ class LearnedModel:
 
     @torch.no_grad()
     def root(self):
-        latent = self.net.encoder(self._tensor([self.image]))[0]
-        return self.image, LatentState(latent, torch.zeros_like(latent))
+        latent, memory = self.net.encode(self._tensor([self.image]))
+        return self.image, LatentState(latent[0], memory[0])
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
         detections = self.recognizer(np.stack([n.image for n in nodes]))
@@ -101,8 +101,7 @@ class LearnedModel:
             plans = [list(parents[k].plan) + [actions[k]] for k in ks]
             rows = torch.from_numpy(np.stack([[encode_affordance(a) for a in plan] for plan in plans]))
             root = self._tensor([self.image] * len(ks))
-            latent = self.net.encoder(root)
-            memory = torch.zeros_like(latent)
+            latent, memory = self.net.encode(root)
             image = root
             for i in range(depth + 1):
                 latent, memory, image = self.net.step(latent, memory, image, rows[:, i])

@@ -9,20 +9,41 @@ from afford.sim.affordances import TYPES
 
 @dataclass(frozen=True)
 class PredictionConfig:
-    # E and D (D mirrors E).
+    # "dense": the paper's vector latent (dense.py); "spatial": a latent grid (spatial.py).
+    # The default is the paper's, so checkpoints written before the spatial net still load.
+    architecture: str = "dense"
     channels: int = 4  # RGBD
+    # --- dense: E and D (D mirrors E).
     conv_channels: int = 8  # 2 convolutions, 3x3, stride 2: 128x128 -> 32x32x8 = 8192
     dense: tuple[int, ...] = (512,)  # dense layers between the 8192 conv features and the latent
     latent: int = 128
     image_size: int = 128
-    # P^a modules, one per affordance type.
-    types: tuple[str, ...] = TYPES
-    p_layers: int = 10  # dense tanh layers, each 2 x latent wide (state half | memory half)
+    p_layers: int = 10  # dense P^a: tanh layers, each 2 x latent wide (state half | memory half)
+    # --- spatial: E's strided convolutions set the grid (128 / 2^3 = 16); P^a residual blocks
+    # on it; D's upsampling stages back to 64 x 64, then a stage on 2x2 pixel blocks that also
+    # sees the current image.
+    activation: str = "gelu"
+    encoder_channels: tuple[int, ...] = (32, 64, 64)
+    latent_channels: int = 32
+    memory_channels: int = 16
+    p_channels: int = 64
+    p_blocks: int = 4
+    blob_sigma: float = 0.8  # the action blob's width, in grid cells
+    decoder_channels: tuple[int, ...] = (64, 48, 32)  # at 16, 32 and 64 px
+    full_channels: int = 32  # the last stage, on 2x2 pixel blocks at 64 px
+    # --- both
+    types: tuple[str, ...] = TYPES  # one P^a per affordance type
     pixel_input: bool = True  # the affordance pixel's RGBD in the action vector (Table 2 ablation)
     # Action vector normalisation: (position - centre) / scale, so its values are order 1.
     position_centre: tuple[float, float, float] = (0.0, 0.27, 0.05)
     position_scale: tuple[float, float, float] = (0.2, 0.2, 0.1)
-    # Training.
+    # Training. The loss per step (train.sequence_loss): mse * squared error + l1 * absolute
+    # error (both summed over channels, mean over pixels) + mask * squared error of eq. (3)'s
+    # mask against where the truth changed + values * D's new values' absolute error there.
+    loss_mse: float = 1.0
+    loss_l1: float = 0.0
+    loss_mask: float = 0.0
+    loss_values: float = 0.0
     optimizer: str = "adam"  # "signsgd" as the paper, or "adam"
     lr: float = 1e-3
     batch_size: int = 32
@@ -37,6 +58,11 @@ class PredictionConfig:
     position_noise: float = 0.002
     angle_noise: float = 1.0
     threads: int = 2
+    loader_workers: int = 1  # background processes building batches (0: in the training thread)
+
+    @property
+    def latent_size(self) -> int:
+        return self.image_size // 2 ** len(self.encoder_channels)
 
     @property
     def conv_size(self) -> int:
@@ -53,9 +79,11 @@ class PredictionConfig:
 
 
 PRESETS = {
-    # Smaller dense layers and a schedule of 3k batches: about an hour on 2 CPU cores. Adam,
-    # because SignSGD at the paper's rate needs the paper's million batches.
-    "cpu": PredictionConfig(),
+    # The spatial latent: it learns in thousands of batches, not a million. Adam, because
+    # SignSGD at the paper's rate needs the paper's million batches.
+    "cpu": PredictionConfig(architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1),
+    # The dense net at CPU size (the shipped net before the spatial one), for comparison.
+    "dense-cpu": PredictionConfig(),
     # The paper's sizes (II.C; the authors' public configuration for the P modules) and schedule.
     "paper": PredictionConfig(
         dense=(4096,),
@@ -67,6 +95,32 @@ PRESETS = {
         log_every=500,
     ),
     "tiny": PredictionConfig(
-        conv_channels=2, dense=(16,), latent=8, p_layers=2, batch_size=4, steps=20, eval_every=10, log_every=5
+        architecture="spatial",
+        loss_l1=1.0,
+        loss_mask=0.1,
+        loss_values=0.1,
+        encoder_channels=(4, 8, 8),
+        latent_channels=4,
+        memory_channels=2,
+        p_channels=8,
+        p_blocks=1,
+        decoder_channels=(8, 4, 4),
+        full_channels=8,
+        batch_size=4,
+        loader_workers=0,
+        steps=20,
+        eval_every=10,
+        log_every=5,
+    ),
+    "tiny-dense": PredictionConfig(
+        conv_channels=2,
+        dense=(16,),
+        latent=8,
+        p_layers=2,
+        batch_size=4,
+        loader_workers=0,
+        steps=20,
+        eval_every=10,
+        log_every=5,
     ),
 }

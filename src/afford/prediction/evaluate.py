@@ -2,7 +2,10 @@
 
 Every evaluated sequence is predicted from its first state through all its executions, each
 step from the previous prediction. Per step: the mean absolute RGBD error over all pixels, and
-over the pixels that changed in the ground truth (any channel by more than CHANGED).
+over the pixels that changed in the ground truth from the step before, under two masks: ours
+(any channel moved by more than CHANGED) and the authors' (any change at all). Beside the net,
+the same figures for copying the input (every step predicted as the start image): a net that
+does not beat it has learned nothing of the effects.
 """
 
 from __future__ import annotations
@@ -19,9 +22,12 @@ from afford.prediction.model import PredictionNet
 from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "prediction"
-CHANGED = 0.02  # a ground-truth pixel changed when a channel moved by more than this
+CHANGED = 0.02  # ours: a ground-truth pixel changed when a channel moved by more than this
 TRAIN_SEQUENCES = 500
 BATCH = 32
+STEPS = 4
+# metric -> the changed-pixel threshold it averages over (None: all pixels)
+METRICS = {"all_area": None, "changed_area": CHANGED, "changed_area_any": 0.0}
 
 
 def load_net(path: str | Path) -> tuple[PredictionNet, PredictionConfig]:
@@ -30,29 +36,34 @@ def load_net(path: str | Path) -> tuple[PredictionNet, PredictionConfig]:
 
 
 @torch.no_grad()
-def errors(net: PredictionNet, data: Dataset, split: str, limit: int | None = None):
-    """Per run and step: (all-area error, changed-area error or NaN), the runs' sequence indices."""
-    runs = PredictionData(data, split, max_steps=4, random_start=False)
-    picks = (
+def errors(net: PredictionNet | None, data: Dataset, split: str, limit: int | None = None):
+    """Per metric, (runs, 4) errors per run and step (NaN where a run has no such step or no
+    changed pixel), and the runs' sequence indices. `net` None: copy the input."""
+    runs = PredictionData(data, split, max_steps=STEPS, random_start=False)
+    picks = list(
         range(len(runs))
         if limit is None
         else np.linspace(0, len(runs) - 1, min(limit, len(runs))).astype(int)
     )
-    picks = list(picks)
-    all_err = np.full((len(picks), 4), np.nan)
-    changed_err = np.full((len(picks), 4), np.nan)
+    out = {m: np.full((len(picks), STEPS), np.nan) for m in METRICS}
     for b in range(0, len(picks), BATCH):
         images, actions, steps = collate_prediction([runs[int(k)] for k in picks[b : b + BATCH]])
-        predicted = net.rollout(images[:, 0], actions)
         truth, before = images[:, 1:], images[:, :-1]
-        abs_err = (predicted - truth).abs()  # (B, L, C, H, W)
-        changed = ((truth - before).abs() > CHANGED).any(2, keepdim=True).expand_as(abs_err)
+        if net is None:
+            predicted = images[:, :1].expand_as(truth)
+        else:
+            predicted = net.rollout(images[:, 0], actions, steps)
+        abs_err = (predicted - truth).abs().mean(2)  # (B, L, H, W)
+        moved = (truth - before).abs().amax(2)  # (B, L, H, W)
         for j in range(len(steps)):
             for s in range(int(steps[j])):
-                all_err[b + j, s] = float(abs_err[j, s].mean())
-                if changed[j, s].any():
-                    changed_err[b + j, s] = float(abs_err[j, s][changed[j, s]].mean())
-    return all_err, changed_err, [runs.indices[int(k)] for k in picks]
+                for metric, threshold in METRICS.items():
+                    err = abs_err[j, s]
+                    if threshold is not None:
+                        err = err[moved[j, s] > threshold]
+                    if err.numel():
+                        out[metric][b + j, s] = float(err.mean())
+    return out, [runs.indices[int(k)] for k in picks]
 
 
 def _stats(values: np.ndarray) -> dict:
@@ -64,59 +75,75 @@ def _stats(values: np.ndarray) -> dict:
     }
 
 
-def table(all_err: np.ndarray, changed_err: np.ndarray) -> dict:
+def table(errs: dict[str, np.ndarray]) -> dict:
     out = {}
-    for s in range(4):
-        out[str(s + 1)] = {"all_area": _stats(all_err[:, s]), "changed_area": _stats(changed_err[:, s])}
-    out["all"] = {"all_area": _stats(all_err.ravel()), "changed_area": _stats(changed_err.ravel())}
+    for s in range(STEPS):
+        out[str(s + 1)] = {m: _stats(e[:, s]) for m, e in errs.items()}
+    out["all"] = {m: _stats(e.ravel()) for m, e in errs.items()}
     return out
 
 
-def evaluate(
-    run: str | Path, data_dir: str | Path, checkpoint: str = "best.safetensors", pictures: bool = True
-) -> dict:
-    run = Path(run)
-    net, config = load_net(run / checkpoint)
+def evaluate(checkpoint: str | Path, data_dir: str | Path, pictures: Path | None = None) -> dict:
+    """Table 2 for the net in `checkpoint`, and the copy baseline, on test and train."""
+    net, config = load_net(checkpoint)
     torch.set_num_threads(config.threads)
     data = Dataset(data_dir)
-    result = {"run": str(run), "checkpoint": checkpoint, "pixel_input": config.pixel_input}
+    result = {
+        "checkpoint": str(checkpoint),
+        "architecture": config.architecture,
+        "pixel_input": config.pixel_input,
+    }
     for split, limit in (("test", None), ("train", TRAIN_SEQUENCES)):
-        all_err, changed_err, _ = errors(net, data, split, limit)
-        result[split] = table(all_err, changed_err)
-    if pictures:
-        result["pictures"] = event_pictures(net, data, run / "predictions")
+        result[split] = table(errors(net, data, split, limit)[0])
+        result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
+    if pictures is not None:
+        result["pictures"] = event_pictures(net, data, pictures)
     return result
 
 
 # ---------------------------------------------------------------------------- pictures
-EVENTS = ("falls off the table", "cup topples", "cup turns with the block", "ball rolls away")
+# The canonical effects, the first step of a sequence executing that type, from the state
+# at that step; then the non-canonical ones, found from the true poses.
+CANONICAL = ("grasp", "place", "turn")
+EVENTS = (*CANONICAL, "falls off the table", "cup topples", "cup turns with the block", "ball rolls away")
+
+
+def _effects(seq, t: int) -> set[str]:
+    """The non-canonical effects that step t of `seq` shows on its true poses."""
+    before, after = seq.poses[t], seq.poses[t + 1]
+    act = seq.action(t)
+    seen: set[str] = set()
+    for k, slot in enumerate(seq.slots):
+        was, now = not np.isnan(before[k, 0]), not np.isnan(after[k, 0])
+        if was and not now:
+            seen.add("falls off the table")
+        if slot.startswith("cup") and was and now and seq.held[t + 1] != k:
+            if _upright(before[k]) and not _upright(after[k]):
+                seen.add("cup topples")
+            moved = np.linalg.norm(after[k, :2] - before[k, :2]) > 0.03
+            # Carried round on the block: raised before and after, still upright (a cup
+            # flung off by the turn lands on the table or on its side).
+            carried = before[k, 2] > 0.06 and after[k, 2] > 0.06 and _upright(after[k])
+            if act.type == "turn" and moved and carried:
+                seen.add("cup turns with the block")
+        untouched = seq.held[t] != k and seq.held[t + 1] != k
+        if slot.startswith("ball") and was and now and untouched:
+            if np.linalg.norm(after[k, :2] - before[k, :2]) > 0.05:
+                seen.add("ball rolls away")
+    return seen
 
 
 def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]]:
-    """The first (sequence, step) of each non-canonical effect, found from the true poses."""
+    """The first (sequence, step) of each event of EVENTS in a split."""
     found: dict[str, tuple[int, int]] = {}
     for i in data.indices(split):
         seq = data.sequence(i)
         for t in range(seq.length):
-            before, after = seq.poses[t], seq.poses[t + 1]
-            act = seq.action(t)
-            for k, slot in enumerate(seq.slots):
-                was, now = not np.isnan(before[k, 0]), not np.isnan(after[k, 0])
-                if was and not now and "falls off the table" not in found:
-                    found["falls off the table"] = (i, t)
-                if slot.startswith("cup") and was and now and seq.held[t + 1] != k:
-                    if _upright(before[k]) and not _upright(after[k]) and "cup topples" not in found:
-                        found["cup topples"] = (i, t)
-                    moved = np.linalg.norm(after[k, :2] - before[k, :2]) > 0.03
-                    # Carried round on the block: raised before and after, still upright (a cup
-                    # flung off by the turn lands on the table or on its side).
-                    carried = before[k, 2] > 0.06 and after[k, 2] > 0.06 and _upright(after[k])
-                    if act.type == "turn" and moved and carried and "cup turns with the block" not in found:
-                        found["cup turns with the block"] = (i, t)
-                untouched = seq.held[t] != k and seq.held[t + 1] != k
-                if slot.startswith("ball") and was and now and untouched and "ball rolls away" not in found:
-                    if np.linalg.norm(after[k, :2] - before[k, :2]) > 0.05:
-                        found["ball rolls away"] = (i, t)
+            events = _effects(seq, t)
+            if not events and t == 0:
+                events = {seq.action(t).type}
+            for name in events:
+                found.setdefault(name, (i, t))
         if len(found) == len(EVENTS):
             break
     return found
@@ -155,11 +182,18 @@ def event_pictures(net: PredictionNet, data: Dataset, out: Path) -> dict[str, st
 
 
 def format_table(result: dict) -> str:
-    lines = [f"pixel input: {'yes' if result['pixel_input'] else 'no'}", ""]
-    lines.append(f"{'':6s} {'step':>5s} {'all area':>18s} {'changed area':>18s}")
+    def cell(s: dict) -> str:
+        return "-" if s["mean"] is None else f"{s['mean']:.4f} ({s['sd']:.4f})"
+
+    lines = [f"{result['architecture']} net, pixel input: {'yes' if result['pixel_input'] else 'no'}", ""]
+    names = {
+        "all_area": "all area",
+        "changed_area": f"changed > {CHANGED}",
+        "changed_area_any": "changed at all",
+    }
+    lines.append(f"{'':11s} {'step':>4s} " + " ".join(f"{names[m]:>18s}" for m in METRICS))
     for split in ("test", "train"):
-        for step, row in result[split].items():
-            a, c = row["all_area"], row["changed_area"]
-            cell = lambda s: "-" if s["mean"] is None else f"{s['mean']:.4f} ({s['sd']:.4f})"  # noqa: E731
-            lines.append(f"{split:6s} {step:>5s} {cell(a):>18s} {cell(c):>18s}")
+        for who in (split, f"{split}_copy"):
+            for step, row in result[who].items():
+                lines.append(f"{who:11s} {step:>4s} " + " ".join(f"{cell(row[m]):>18s}" for m in METRICS))
     return "\n".join(lines)

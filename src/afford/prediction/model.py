@@ -1,11 +1,16 @@
-"""The EM*D prediction pathway with differential prediction (paper II.C, Fig. 4).
+"""The EM*D prediction pathway with differential prediction (paper II.C).
 
 E encodes a state image to a latent c. For each action, the P module of its affordance type
-turns (c, memory trace, action vector) into a latent difference dc and the next memory trace;
+turns (c, memory trace, action) into a latent difference dc and the next memory trace;
 c' = c + dc (eq. 2). D decodes dc to an (n+1)-channel difference image whose last channel is a
 mask, applied to the current image by eq. (3). The action vector's last values are the RGBD
 of the affordance's pixel, read from the current image: the real one at the first step, the
 predicted one after.
+
+Two architectures fill in E, P^a and D (`config.architecture`): "dense", the paper's vector
+latent (`dense.py`, the `paper` preset), and "spatial", a latent grid that learns on a CPU
+(`spatial.py`, the `cpu` preset). This module holds what they share: routing by type, the
+action vector, eq. (2) and (3), and the rollout.
 """
 
 from __future__ import annotations
@@ -14,127 +19,50 @@ import torch
 from torch import nn
 
 from afford.prediction.config import PredictionConfig
-from afford.sim.camera import FOCAL_PX, SIZE
-from afford.sim.constants import CAMERA
+from afford.prediction.dense import DenseDecoder, DenseEncoder, DenseP
+from afford.prediction.layers import apply_difference, clamped_tanh, normalise_latent
+from afford.prediction.spatial import SpatialDecoder, SpatialEncoder, SpatialP
+from afford.sim.camera import world_to_pixel
 
-# D's mask starts a little open (clamped tanh(0.15) = 0.15): fully closed, neither the mask nor
-# the difference image would get a gradient (eq. 3 multiplies one by the other).
-MASK_BIAS = 0.15
+__all__ = ["PredictionNet", "affordance_pixel", "apply_difference", "clamped_tanh", "normalise_latent"]
 
-
-def normalise_latent(a: torch.Tensor) -> torch.Tensor:
-    """The authors' latent normalisation: a / sqrt(1 + sum a^2), keeping the norm below 1."""
-    return a / torch.sqrt(1 + (a * a).sum(-1, keepdim=True))
-
-
-def clamped_tanh(x: torch.Tensor) -> torch.Tensor:
-    """tanh clamped to [0, 1] (the authors' D output), with tanh's gradient through the clamp.
-
-    The clamp lets the mask be exactly 0, so eq. (3) copies unchanged pixels exactly; passing
-    the gradient straight through it keeps a closed mask able to open again where a change
-    appears (a plain clamp would leave it dead).
-    """
-    t = torch.tanh(x)
-    return t + (t.clamp(0.0, 1.0) - t).detach()
-
-
-class Encoder(nn.Module):
-    def __init__(self, c: PredictionConfig):
-        super().__init__()
-        k = c.conv_channels
-        self.convs = nn.Sequential(
-            nn.Conv2d(c.channels, k, 3, 2, 1), nn.Tanh(), nn.Conv2d(k, k, 3, 2, 1), nn.Tanh(), nn.Flatten()
-        )
-        sizes = [c.conv_features, *c.dense, c.latent]
-        layers: list[nn.Module] = []
-        for i, (a, b) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
-            layers.append(nn.Linear(a, b))
-            if i < len(sizes) - 2:
-                layers.append(nn.Tanh())
-        self.dense = nn.Sequential(*layers)
-
-    def forward(self, image: torch.Tensor) -> torch.Tensor:
-        features = self.convs[:-1](image.contiguous(memory_format=torch.channels_last))
-        return normalise_latent(self.dense(features.contiguous().flatten(1)))
-
-
-class Decoder(nn.Module):
-    """Latent difference -> (n+1)-channel difference image, every channel in [0, 1]."""
-
-    def __init__(self, c: PredictionConfig):
-        super().__init__()
-        sizes = [c.latent, *reversed(c.dense), c.conv_features]
-        layers: list[nn.Module] = []
-        for a, b in zip(sizes[:-1], sizes[1:], strict=True):
-            layers += [nn.Linear(a, b), nn.Tanh()]
-        self.dense = nn.Sequential(*layers)
-        self.shape = (c.conv_channels, c.conv_size, c.conv_size)
-        k = c.conv_channels
-        # Nearest-neighbour 2x upscaling between the up-convolutions (paper, after [25]).
-        self.up = nn.Sequential(
-            nn.Upsample(scale_factor=2, mode="nearest"),
-            nn.Conv2d(k, k, 3, 1, 1),
-            nn.Tanh(),
-            nn.Upsample(scale_factor=2, mode="nearest"),
-            nn.Conv2d(k, c.channels + 1, 3, 1, 1),
-        )
-        with torch.no_grad():
-            self.up[-1].bias[-1] = MASK_BIAS
-
-    def forward(self, dc: torch.Tensor) -> torch.Tensor:
-        x = self.dense(dc).view(-1, *self.shape).contiguous(memory_format=torch.channels_last)
-        return clamped_tanh(self.up(x))
-
-
-class PModule(nn.Module):
-    """One affordance type's prediction module (Fig. 4, the authors' configuration).
-
-    Each layer sees [state half | memory half | action]; the state half is carried by a
-    residual from layer to layer, the memory half becomes the next step's memory trace.
-    """
-
-    def __init__(self, c: PredictionConfig):
-        super().__init__()
-        width = 2 * c.latent
-        self.latent = c.latent
-        self.layers = nn.ModuleList(nn.Linear(width + c.action_size, width) for _ in range(c.p_layers))
-
-    def forward(self, latent: torch.Tensor, memory: torch.Tensor, action: torch.Tensor):
-        h = torch.cat([latent, memory], -1)
-        for layer in self.layers:
-            out = torch.tanh(layer(torch.cat([h, action], -1)))
-            h = torch.cat([h[:, : self.latent] + out[:, : self.latent], out[:, self.latent :]], -1)
-        return h[:, : self.latent] - latent, h[:, self.latent :]
-
-
-def apply_difference(state: torch.Tensor, difference: torch.Tensor) -> torch.Tensor:
-    """Eq. (3): s_{i+1} = mask * diff + (1 - mask) * s_i, the mask being the last channel."""
-    mask = difference[:, -1:]
-    return mask * difference[:, :-1] + (1 - mask) * state
+# architecture -> (E, P^a, D)
+ARCHITECTURES: dict[str, tuple[type[nn.Module], type[nn.Module], type[nn.Module]]] = {
+    "dense": (DenseEncoder, DenseP, DenseDecoder),
+    "spatial": (SpatialEncoder, SpatialP, SpatialDecoder),
+}
 
 
 def affordance_pixel(images: torch.Tensor, positions: torch.Tensor) -> torch.Tensor:
     """RGBD (B, C) of the pixel each world position (B, 3) projects to (the camera model)."""
-    cx, cy, cz = CAMERA.pos
-    depth = cz - positions[:, 2]
-    col = SIZE / 2 + FOCAL_PX * (positions[:, 0] - cx) / depth
-    row = SIZE / 2 - FOCAL_PX * (positions[:, 1] - cy) / depth
-    col = col.floor().long().clamp(0, images.shape[-1] - 1)
-    row = row.floor().long().clamp(0, images.shape[-2] - 1)
+    px = world_to_pixel(positions).floor().long()
+    col = px[:, 0].clamp(0, images.shape[-1] - 1)
+    row = px[:, 1].clamp(0, images.shape[-2] - 1)
     return images[torch.arange(len(images)), :, row, col]
 
 
 class PredictionNet(nn.Module):
     def __init__(self, config: PredictionConfig):
         super().__init__()
+        if config.architecture not in ARCHITECTURES:
+            raise ValueError(
+                f"unknown prediction architecture {config.architecture!r}; "
+                f"expected one of {sorted(ARCHITECTURES)}"
+            )
+        encoder, p_module, decoder = ARCHITECTURES[config.architecture]
         self.config = config
-        self.encoder = Encoder(config)
-        self.decoder = Decoder(config)
-        self.modules_by_type = nn.ModuleList(PModule(config) for _ in config.types)
+        self.encoder = encoder(config)
+        self.decoder = decoder(config)
+        self.modules_by_type = nn.ModuleList(p_module(config) for _ in config.types)
         # Channels-last: the small convolutions over 128x128 images run ~3x faster on CPUs.
-        self.to(memory_format=torch.channels_last)
+        self.to(memory_format=torch.channels_last) if config.architecture == "dense" else None
         self.register_buffer("pos_centre", torch.tensor(config.position_centre), persistent=False)
         self.register_buffer("pos_scale", torch.tensor(config.position_scale), persistent=False)
+
+    def encode(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """E: (c_0, m_0) for images (B, C, H, W); the memory trace starts at zeros."""
+        latent = self.encoder(image)
+        return latent, self.encoder.initial_memory(latent)
 
     def action_vector(self, rows: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
         """Affordance rows (B, 7: type, x, y, z, angle, symmetric, turn) -> the P input (B, 9)."""
@@ -150,31 +78,69 @@ class PredictionNet(nn.Module):
             -1,
         )
 
+    def step_with_difference(self, latent, memory, image, rows):
+        """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
+        new values and, last, its mask."""
+        vector = self.action_vector(rows, image)
+        pixel = world_to_pixel(rows[:, 1:4])
+        types = rows[:, 0].long()
+        dc = memory_out = None
+        for t, module in enumerate(self.modules_by_type):
+            idx = torch.nonzero(types == t).flatten()
+            if not len(idx):
+                continue
+            d, m = module(latent[idx], memory[idx], vector[idx], pixel[idx])
+            if dc is None:
+                dc = latent.new_zeros((len(rows), *d.shape[1:]))
+                memory_out = memory.new_zeros((len(rows), *m.shape[1:]))
+            dc = dc.index_copy(0, idx, d)
+            memory_out = memory_out.index_copy(0, idx, m)
+        next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
+        difference = self.decoder(dc, image)
+        next_image = apply_difference(image, difference)  # eq. (3)
+        return next_latent, memory_out, next_image, difference
+
     def step(self, latent, memory, image, rows):
         """One prediction: (c_i, m_i, s_i, a_i) -> (c_{i+1}, m_{i+1}, s_{i+1}).
 
         Each example goes through the P module of its own affordance type.
         """
-        action = self.action_vector(rows, image)
-        types = rows[:, 0].long()
-        dc = torch.zeros_like(latent)
-        new_memory = torch.zeros_like(memory)
-        for t, module in enumerate(self.modules_by_type):
-            idx = torch.nonzero(types == t).flatten()
-            if len(idx):
-                d, m = module(latent[idx], memory[idx], action[idx])
-                dc = dc.index_copy(0, idx, d)
-                new_memory = new_memory.index_copy(0, idx, m)
-        next_latent = normalise_latent(latent + dc)  # eq. (2), re-normalised
-        next_image = apply_difference(image, self.decoder(dc))  # eq. (3)
-        return next_latent, new_memory, next_image
+        return self.step_with_difference(latent, memory, image, rows)[:3]
 
-    def rollout(self, image: torch.Tensor, actions: torch.Tensor) -> torch.Tensor:
+    def rollout_with_differences(
+        self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Predicted states (B, L, C, H, W) and D's differences (B, L, C+1, H, W) after each of
+        L actions.
+
+        With `steps` (B,), run k stops after steps[k] actions (its later outputs are zeros):
+        padded steps of a batch cost nothing.
+        """
+        b, length = actions.shape[:2]
+        order = torch.arange(b) if steps is None else torch.argsort(steps, descending=True, stable=True)
+        active = (
+            torch.full((length,), b)
+            if steps is None
+            else (steps[order][None, :] > torch.arange(length)[:, None]).sum(1)
+        )
+        image = image[order]
+        acts = actions[order]
+        latent, memory = self.encode(image)
+        states = image.new_zeros((b, length, *image.shape[1:]))
+        differences = image.new_zeros((b, length, image.shape[1] + 1, *image.shape[2:]))
+        for i in range(length):
+            n = int(active[i])
+            if n == 0:
+                break
+            latent, memory, image, difference = self.step_with_difference(
+                latent[:n], memory[:n], image[:n], acts[:n, i]
+            )
+            states[order[:n], i] = image
+            differences[order[:n], i] = difference
+        return states, differences
+
+    def rollout(
+        self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """Predicted states (B, L, C, H, W) after each of L actions (B, L, 7) from images (B, C, H, W)."""
-        latent = self.encoder(image)
-        memory = torch.zeros_like(latent)  # no trace before the first step
-        out = []
-        for i in range(actions.shape[1]):
-            latent, memory, image = self.step(latent, memory, image, actions[:, i])
-            out.append(image)
-        return torch.stack(out, 1)
+        return self.rollout_with_differences(image, actions, steps)[0]

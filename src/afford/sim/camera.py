@@ -24,13 +24,21 @@ def unit_to_depth(depth_unit: np.ndarray | float) -> np.ndarray | float:
     return CAMERA.near + np.asarray(depth_unit) * (CAMERA.far - CAMERA.near)
 
 
-def world_to_pixel(points: np.ndarray) -> np.ndarray:
-    """World (..., 3) -> continuous pixel coordinates (..., 2) as (column, row)."""
-    p = np.asarray(points, dtype=float)
+def world_to_pixel(points):
+    """World (..., 3) -> continuous pixel coordinates (..., 2) as (column, row).
+
+    Takes a NumPy array or a torch tensor (the prediction net projects affordances with it)
+    and returns the same kind.
+    """
+    p = points if hasattr(points, "detach") else np.asarray(points, dtype=float)
     cx, cy, cz = CAMERA.pos
     depth = cz - p[..., 2]
     col = SIZE / 2 + FOCAL_PX * (p[..., 0] - cx) / depth
     row = SIZE / 2 - FOCAL_PX * (p[..., 1] - cy) / depth
+    if hasattr(points, "detach"):
+        import torch
+
+        return torch.stack([col, row], dim=-1)
     return np.stack([col, row], axis=-1)
 
 

@@ -66,7 +66,12 @@ def cmd_eval(args) -> int:
             _check_run(args.run)
             checkpoint, folder = Path(args.run) / args.checkpoint, Path(args.run)
         folder.mkdir(parents=True, exist_ok=True)
-        result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1])
+        recognizer = None
+        if not args.no_futures:
+            from afford.planning.learned import load_learned
+
+            recognizer, _ = load_learned(args.recognition)
+        result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
     record, pictures = EVALS[args.net]
     (folder / record).write_text(json.dumps(result, indent=2) + "\n")
     if args.json:
@@ -168,6 +173,12 @@ def add_parsers(sub) -> None:
     p.add_argument(
         "--out", default="out/eval-prediction", metavar="DIR", help="where results go without --run"
     )
+    p.add_argument(
+        "--recognition",
+        metavar="DIR",
+        help="weights folder whose recognition net runs on the predicted states (default: the shipped one)",
+    )
+    p.add_argument("--no-futures", action="store_true", help="skip recognition on the predicted states")
     for q in (r, p):
         q.add_argument("--data", required=True, metavar="DIR")
         q.add_argument(

@@ -50,7 +50,9 @@ class PredictionConfig:
     steps: int = 3000
     eval_every: int = 250
     log_every: int = 25
-    patience: int = 5  # halve the lr after this many evaluations without improvement (paper)
+    schedule: str = "plateau"  # "plateau": the paper's halving; "cosine": warm-up, cosine decay
+    patience: int = 5  # plateau: halve the lr after this many evaluations without improvement (paper)
+    warmup: int = 200  # cosine: batches of linear warm-up
     max_steps: int = 4  # executions per training run (1-4, random start)
     shift_px: int = 3
     mirror: bool = True
@@ -58,6 +60,7 @@ class PredictionConfig:
     position_noise: float = 0.002
     angle_noise: float = 1.0
     threads: int = 2
+    bf16: bool = False  # bfloat16 autocast in training (AVX-512 BF16 CPUs); measured in benchmarks/
     loader_workers: int = 1  # background processes building batches (0: in the training thread)
 
     @property
@@ -81,7 +84,9 @@ class PredictionConfig:
 PRESETS = {
     # The spatial latent: it learns in thousands of batches, not a million. Adam, because
     # SignSGD at the paper's rate needs the paper's million batches.
-    "cpu": PredictionConfig(architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1),
+    "cpu": PredictionConfig(
+        architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=6000
+    ),
     # The dense net at CPU size (the shipped net before the spatial one), for comparison.
     "dense-cpu": PredictionConfig(),
     # The paper's sizes (II.C; the authors' public configuration for the P modules) and schedule.

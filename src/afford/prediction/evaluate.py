@@ -83,8 +83,11 @@ def table(errs: dict[str, np.ndarray]) -> dict:
     return out
 
 
-def evaluate(checkpoint: str | Path, data_dir: str | Path, pictures: Path | None = None) -> dict:
-    """Table 2 for the net in `checkpoint`, and the copy baseline, on test and train."""
+def evaluate(
+    checkpoint: str | Path, data_dir: str | Path, pictures: Path | None = None, recognizer=None
+) -> dict:
+    """Table 2 for the net in `checkpoint`, and the copy baseline, on test and train; with a
+    recogniser, also recognition on the predicted test states (`futures.py`)."""
     net, config = load_net(checkpoint)
     torch.set_num_threads(config.threads)
     data = Dataset(data_dir)
@@ -96,6 +99,10 @@ def evaluate(checkpoint: str | Path, data_dir: str | Path, pictures: Path | None
     for split, limit in (("test", None), ("train", TRAIN_SEQUENCES)):
         result[split] = table(errors(net, data, split, limit)[0])
         result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
+    if recognizer is not None:
+        from afford.prediction.futures import future_recall
+
+        result["future_recall"] = future_recall(net, recognizer, data, "test")
     if pictures is not None:
         result["pictures"] = event_pictures(net, data, pictures)
     return result
@@ -196,4 +203,12 @@ def format_table(result: dict) -> str:
         for who in (split, f"{split}_copy"):
             for step, row in result[who].items():
                 lines.append(f"{who:11s} {step:>4s} " + " ".join(f"{cell(row[m]):>18s}" for m in METRICS))
+    if "future_recall" in result:
+        from afford.prediction.futures import format_futures
+
+        lines += [
+            "",
+            "recognition on predicted test states (Table 1's criteria):",
+            format_futures(result["future_recall"]),
+        ]
     return "\n".join(lines)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,20 +17,9 @@ from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
-from afford.training.loop import Loop, LoopState, run
+from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
-
-
-def warmup_cosine(warmup: int, steps: int):
-    def factor(step: int) -> float:
-        if step < warmup:
-            return (step + 1) / warmup
-        return 0.05 + 0.95 * 0.5 * (
-            1 + math.cos(math.pi * min(1.0, (step - warmup) / max(steps - warmup, 1)))
-        )
-
-    return factor
 
 
 def rows_to_affordances(rows: torch.Tensor | np.ndarray) -> list[Affordance]:

@@ -8,6 +8,7 @@ lowest validation loss. RUN/config.json holds the config for people to read.
 from __future__ import annotations
 
 import json
+import math
 import signal
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -49,6 +50,19 @@ class Loop:
     validate: Callable[[], dict[str, float]]  # must contain "loss"
     lr_at: Callable[[int], float] | None = None  # lr multiplier by step (warm-up, cosine)
     patience: int | None = None  # halve the lr after this many evaluations without improvement
+
+
+def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:
+    """lr multiplier: linear warm-up, then a cosine down to 5% at the last step."""
+
+    def factor(step: int) -> float:
+        if step < warmup:
+            return (step + 1) / warmup
+        return 0.05 + 0.95 * 0.5 * (
+            1 + math.cos(math.pi * min(1.0, (step - warmup) / max(steps - warmup, 1)))
+        )
+
+    return factor
 
 
 def _forever(batches: Iterable) -> Iterator:

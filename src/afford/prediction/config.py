@@ -27,10 +27,10 @@ class PredictionConfig:
     latent_channels: int = 32
     memory_channels: int = 16
     p_channels: int = 64
-    p_blocks: int = 4
+    p_blocks: int = 3
     blob_sigma: float = 0.8  # the action blob's width, in grid cells
-    decoder_channels: tuple[int, ...] = (64, 48, 32)  # at 16, 32 and 64 px
-    full_channels: int = 32  # the last stage, on 2x2 pixel blocks at 64 px
+    decoder_channels: tuple[int, ...] = (64, 32, 16)  # at 16, 32 and 64 px
+    full_channels: int = 24  # the last stage, on 2x2 pixel blocks at 64 px
     # --- both
     types: tuple[str, ...] = TYPES  # one P^a per affordance type
     pixel_input: bool = True  # the affordance pixel's RGBD in the action vector (Table 2 ablation)
@@ -85,7 +85,7 @@ PRESETS = {
     # The spatial latent: it learns in thousands of batches, not a million. Adam, because
     # SignSGD at the paper's rate needs the paper's million batches.
     "cpu": PredictionConfig(
-        architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=6000
+        architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=5000
     ),
     # The dense net at CPU size (the shipped net before the spatial one), for comparison.
     "dense-cpu": PredictionConfig(),

@@ -126,8 +126,7 @@ class PredictionNet(nn.Module):
         image = image[order]
         acts = actions[order]
         latent, memory = self.encode(image)
-        states = image.new_zeros((b, length, *image.shape[1:]))
-        differences = image.new_zeros((b, length, image.shape[1] + 1, *image.shape[2:]))
+        states = differences = None
         for i in range(length):
             n = int(active[i])
             if n == 0:
@@ -135,6 +134,9 @@ class PredictionNet(nn.Module):
             latent, memory, image, difference = self.step_with_difference(
                 latent[:n], memory[:n], image[:n], acts[:n, i]
             )
+            if states is None:  # made here: under autocast the outputs may be bfloat16
+                states = image.new_zeros((b, length, *image.shape[1:]))
+                differences = difference.new_zeros((b, length, *difference.shape[1:]))
             states[order[:n], i] = image
             differences[order[:n], i] = difference
         return states, differences

@@ -170,3 +170,34 @@ def test_spatial_action_maps_peak_at_the_affordance_pixel():
     )
     assert torch.isclose(at[5], torch.tensor(-1.0))
     assert torch.allclose(at[7:], affordance_pixel(image, rows[:, 1:4])[0])
+
+
+def test_shipped_weights_predict_a_grasp_at_the_object_and_in_the_gripper(scene):
+    from scenarios import find
+
+    from afford.planning.learned import PREDICTION_FILE, WEIGHTS
+    from afford.prediction.evaluate import load_net
+    from afford.sim.scene import ObjectSpec
+
+    net, config = load_net(WEIGHTS / PREDICTION_FILE)
+    assert config.architecture == "spatial"
+    scene.reset([ObjectSpec.upright("cup", 0.10, 0.36), ObjectSpec.upright("support", -0.12, 0.30)])
+    image = scene.observe()
+    grasp = find(scene.affordances(), "grasp", (0.10, 0.36))
+    x = torch.from_numpy(image).permute(2, 0, 1)[None]
+    with torch.no_grad():
+        predicted = net.rollout(x, actions(grasp)[None])[0, 0].permute(1, 2, 0).numpy()
+    changed = np.abs(predicted - image).max(-1) > 0.1
+    # Where a change belongs: around the cup (it leaves) and in the gripper's part of the
+    # image (it arrives there), the true next state's changes marking the gripper's part.
+    scene.execute(grasp)
+    truth_changed = np.abs(scene.observe() - image).max(-1) > 0.02
+    r, c = camera.pixel_index(np.array(grasp.position))
+    rows, cols = np.mgrid[:128, :128]
+    at_cup = np.hypot(rows - r, cols - c) < 14
+    gripper = np.zeros_like(at_cup)
+    gr, gc = np.nonzero(truth_changed & ~at_cup)
+    gripper[max(gr.min() - 6, 0) : gr.max() + 7, max(gc.min() - 6, 0) : gc.max() + 7] = True
+    assert changed[at_cup].sum() > 40  # the cup is erased from where it stood
+    assert (changed & gripper).sum() > 40  # and drawn in the gripper
+    assert (changed & ~at_cup & ~gripper).sum() < 0.03 * changed.sum()  # nothing changes elsewhere

@@ -109,8 +109,8 @@ def evaluate(
 
 
 # ---------------------------------------------------------------------------- pictures
-# The canonical effects, the first step of a sequence executing that type, from the state
-# at that step; then the non-canonical ones, found from the true poses.
+# The canonical effects (the first step executing that type with no side effect), then the
+# non-canonical ones, found from the true poses.
 CANONICAL = ("grasp", "place", "turn")
 EVENTS = (*CANONICAL, "falls off the table", "cup topples", "cup turns with the block", "ball rolls away")
 
@@ -147,7 +147,7 @@ def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]
         seq = data.sequence(i)
         for t in range(seq.length):
             events = _effects(seq, t)
-            if not events and t == 0:
+            if not events:  # a canonical step: only what the action itself does
                 events = {seq.action(t).type}
             for name in events:
                 found.setdefault(name, (i, t))

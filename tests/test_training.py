@@ -86,3 +86,13 @@ def test_sigterm_saves_a_checkpoint_and_resume_continues(small_dataset, tmp_path
 
     _, meta = read_checkpoint(run / "last.safetensors", "recognition")
     assert meta["step"] > 0
+
+
+def test_keep_freed_memory_applies_on_glibc():
+    import platform
+
+    from afford.training.memory import keep_freed_memory
+
+    applied = keep_freed_memory()
+    if platform.system() == "Linux" and platform.libc_ver()[0] == "glibc":
+        assert applied

@@ -340,8 +340,10 @@ def main(argv: list[str] | None = None) -> int:
     from afford.planning.tasks import TaskError
     from afford.sim.scene import SceneError
     from afford.training.checkpoint import CheckpointError
+    from afford.training.memory import keep_freed_memory
 
     args = build_parser().parse_args(argv)
+    keep_freed_memory()  # the nets' large tensors recur every step: keep their memory
     try:
         return args.func(args)
     except (CLIError, SceneError, TaskError, DataError, CheckpointError) as e:

@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml scripts/setup_system.sh
 install: $(STAMP)
 
 # The learned planner (paper II.D) with the weights shipped in the package: no training step.
-DEMO_TASK := tasks/paper/08-slope.json
+DEMO_TASK := tasks/paper/10-hide.json
 
 demo: install
 	$(VENV)/bin/afford scene --seed 7 --out out/scene.png

@@ -81,6 +81,9 @@ class PredictionConfig:
         return 5 + self.channels
 
 
+# Tests' nets: a few batches of 4, built in the training thread.
+_TINY_SCHEDULE = {"batch_size": 4, "loader_workers": 0, "steps": 20, "eval_every": 10, "log_every": 5}
+
 PRESETS = {
     # The spatial latent: it learns in thousands of batches, not a million. Adam, because
     # SignSGD at the paper's rate needs the paper's million batches.
@@ -111,21 +114,13 @@ PRESETS = {
         p_blocks=1,
         decoder_channels=(8, 4, 4),
         full_channels=8,
-        batch_size=4,
-        loader_workers=0,
-        steps=20,
-        eval_every=10,
-        log_every=5,
+        **_TINY_SCHEDULE,
     ),
     "tiny-dense": PredictionConfig(
         conv_channels=2,
         dense=(16,),
         latent=8,
         p_layers=2,
-        batch_size=4,
-        loader_workers=0,
-        steps=20,
-        eval_every=10,
-        log_every=5,
+        **_TINY_SCHEDULE,
     ),
 }

@@ -21,6 +21,7 @@ import torch
 from afford.prediction.config import PRESETS
 from afford.prediction.model import PredictionNet
 from afford.prediction.train import make_optimizer, sequence_loss
+from afford.training.memory import keep_freed_memory
 
 PAPER_BATCHES = 1_000_000
 # Run lengths of a training batch: the default dataset's random starts give about this mix.
@@ -91,10 +92,13 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--data", help="build the cpu preset's batches from this dataset (in the loop)")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--no-keep-memory", action="store_true", help="leave glibc's malloc as it is (as before)")
     args = ap.parse_args()
+    if not args.no_keep_memory:
+        keep_freed_memory()  # as `afford train` does
     torch.set_num_threads(args.threads)
     np.random.seed(0)
-    result = {"threads": args.threads}
+    result = {"threads": args.threads, "keep_freed_memory": not args.no_keep_memory}
     cases = {
         "cpu": PRESETS["cpu"],
         "cpu bf16": replace(PRESETS["cpu"], bf16=True),
@@ -114,7 +118,7 @@ def main() -> None:
         print(json.dumps(result, indent=2))
         return
     for name in result:
-        if name == "threads":
+        if name in ("threads", "keep_freed_memory"):
             continue
         r = result[name]
         parts = ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in r["seconds"].items() if v > 0.0005)

@@ -1,4 +1,4 @@
-"""Training-time augmentation (paper II.B-C; DESIGN.md "Prediction pathway").
+"""Training-time augmentation (paper II.B, II.C and III.C).
 
 Everything acts on the stored form: (T, H, W, 4) RGBD images and affordance rows in the world
 frame (format.AFF_COLUMNS). A geometric change to the image is carried over to the rows through

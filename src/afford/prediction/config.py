@@ -1,4 +1,4 @@
-"""Prediction pathway configuration (paper II.C; DESIGN.md), with its presets."""
+"""Prediction pathway configuration (paper II.C, III.C), with its presets."""
 
 from __future__ import annotations
 

@@ -13,12 +13,12 @@ from afford.data.augment import AugmentConfig
 from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction, worker_init
 from afford.prediction.config import PRESETS, PredictionConfig
+from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
 
 VAL_RUNS = 128  # validation runs per evaluation
-CHANGED = 0.02  # a ground-truth pixel changed when a channel moved by more than this (Table 2)
 
 
 def step_mask(steps: torch.Tensor, longest: int) -> torch.Tensor:
@@ -29,7 +29,7 @@ def step_mask(steps: torch.Tensor, longest: int) -> torch.Tensor:
 def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor):
     """The training loss, mean over the real steps of the batch (padded steps are not run).
 
-    The paper's is the squared error over the channels, mean over pixels (DESIGN.md). The
+    The paper's is the squared error over the channels, mean over pixels (paper II.C). The
     config may add: the absolute error (sharper changes than the squared error's blur); the
     squared error of eq. (3)'s mask against where the truth changed; and the absolute error of
     D's new values against the truth where it changed. The last two reach D even where the

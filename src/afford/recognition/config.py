@@ -1,4 +1,4 @@
-"""Recognition net configuration, with the two presets (paper II.B, DESIGN.md)."""
+"""Recognition net configuration, with the two presets (paper II.B, III.C)."""
 
 from __future__ import annotations
 

@@ -95,7 +95,7 @@ def _split(raw: torch.Tensor, config: RecognitionConfig):
 def loss(
     raw: torch.Tensor, targets: Targets, config: RecognitionConfig
 ) -> tuple[torch.Tensor, dict[str, float]]:
-    """BCE for confidence and type, MSE for offsets, angle, z and symmetry (DESIGN.md)."""
+    """BCE for confidence and type, MSE for offsets, angle, z and symmetry (paper II.B)."""
     conf, type_logits, xy, angle, z, sym = _split(raw, config)
     n_pos = targets.obj.sum().clamp(min=1.0)
     l_conf = F.binary_cross_entropy_with_logits(conf, targets.obj, reduction="sum") / n_pos

@@ -77,7 +77,7 @@ class Ball:
     mass: float = 0.1  # heavier than a cup: a ball counterbalances a cup on the block (task 4)
     rgba: tuple[float, float, float, float] = (0.95, 0.15, 0.1, 1.0)
     # Small rolling friction lets a ball come to rest on the flat table but still roll
-    # down the block when it lies at a slope (DESIGN.md: MuJoCo notes).
+    # down the block when it lies at a slope (MuJoCo: rolling friction needs condim 6).
     rolling_friction: float = 0.0004
 
 

@@ -88,7 +88,7 @@ PRESETS = {
     # The spatial latent: it learns in thousands of batches, not a million. Adam, because
     # SignSGD at the paper's rate needs the paper's million batches.
     "cpu": PredictionConfig(
-        architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=5000
+        architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=4200
     ),
     # The dense net at CPU size (the shipped net before the spatial one), for comparison.
     "dense-cpu": PredictionConfig(),

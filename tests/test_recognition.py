@@ -9,8 +9,8 @@ import torch
 from afford.data.format import encode_affordance
 from afford.recognition.config import PRESETS
 from afford.recognition.metrics import Tally, matches
-from afford.recognition.model import REG, RecognitionNet
-from afford.recognition.targets import Detection, build_targets, decode, loss, suppress
+from afford.recognition.model import REG, RecognitionNet, fused_for_inference
+from afford.recognition.targets import Detection, build_targets, decode, loss, quality, suppress
 from afford.sim import camera
 from afford.sim.affordances import Affordance
 from afford.training.checkpoint import CheckpointError, save_checkpoint
@@ -134,6 +134,51 @@ def test_loss_falls_on_a_tiny_batch():
         opt.step()
         losses.append(float(total.detach()))
     assert losses[-1] < 0.5 * losses[0]
+
+
+def test_type_weights_scale_that_types_terms_only():
+    from dataclasses import replace
+
+    torch.manual_seed(0)
+    raw = RecognitionNet(TINY)(torch.rand(1, 4, 128, 128)).detach()
+    turn = build_targets([rows(Affordance("turn", (-0.05, 0.25, 0.025), 45.0, False))], TINY)
+    grasp = build_targets([rows(Affordance("grasp", (0.05, 0.30, 0.04), 0.0, True))], TINY)
+    heavy = replace(TINY, type_weights=(1.0, 1.0, 3.0))
+    _, plain_turn = loss(raw, turn, TINY)
+    _, heavy_turn = loss(raw, turn, heavy)
+    for term in ("type", "xy", "angle", "z", "sym"):
+        assert heavy_turn[term] == pytest.approx(3 * plain_turn[term], rel=1e-5)
+    assert heavy_turn["conf"] > plain_turn["conf"]  # its positive cells weigh 3, negatives 1
+    assert loss(raw, grasp, heavy)[0] == pytest.approx(float(loss(raw, grasp, TINY)[0]), rel=1e-6)
+
+
+def test_quality_is_one_where_the_regression_is_exact_and_falls_with_the_angle_error():
+    t = build_targets([rows(Affordance("turn", (-0.05, 0.25, 0.025), 45.0, False))], TINY)
+    xy, angle = t.reg[..., :2].clone(), t.reg[..., 2].clone()
+    q = quality(xy, angle, t, TINY)
+    assert torch.all(q[t.obj > 0] == 1) and torch.all(q[t.obj == 0] == 0)
+    off = quality(xy, angle + TINY.quality_degrees / 45.0, t, TINY)  # one width off
+    assert torch.allclose(off[t.obj > 0], torch.tensor(np.exp(-0.5), dtype=torch.float32))
+    sym = build_targets([rows(Affordance("grasp", (0.05, 0.30, 0.04), 0.0, True))], TINY)
+    assert torch.all(quality(sym.reg[..., :2], sym.reg[..., 2] + 0.5, sym, TINY)[sym.obj > 0] == 1)
+
+
+def test_folded_batch_norms_give_the_same_outputs():
+    torch.manual_seed(0)
+    net = RecognitionNet(TINY)
+    with torch.no_grad():
+        for _ in range(3):  # running statistics away from their initial 0 / 1
+            net(torch.rand(4, 4, 128, 128) * 2)
+        for m in net.modules():
+            if isinstance(m, torch.nn.BatchNorm2d):
+                m.weight.uniform_(0.5, 1.5)
+                m.bias.uniform_(-0.2, 0.2)
+    net.eval()
+    fused = fused_for_inference(net)
+    assert not any(isinstance(m, torch.nn.BatchNorm2d) for m in fused.stem.modules())
+    x = torch.rand(2, 4, 128, 128)
+    with torch.no_grad():
+        assert torch.allclose(fused(x), net(x), atol=1e-4, rtol=1e-4)
 
 
 def test_checkpoint_errors(tmp_path):

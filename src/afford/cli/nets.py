@@ -8,6 +8,9 @@ from pathlib import Path
 
 def cmd_train(args) -> int:
     """Train the net named by `args.net` with its preset and overrides."""
+    from afford.cli.main import CLIError
+    from afford.training.overrides import OverrideError, apply_overrides
+
     if args.net == "recognition":
         from afford.recognition.train import config_for, train
 
@@ -19,7 +22,11 @@ def cmd_train(args) -> int:
             args.preset, steps=args.steps, threads=args.threads, pixel_input=not args.no_affordance_pixel
         )
     try:
-        state = train(args.data, config, args.out, progress=not args.json)
+        config = apply_overrides(config, args.set)
+    except OverrideError as e:
+        raise CLIError(str(e)) from None
+    try:
+        state = train(args.data, config, args.out, progress=not args.json, init=args.init)
     except KeyboardInterrupt:
         print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
         return 130
@@ -47,14 +54,19 @@ EVALS = {"recognition": ("table1.json", "detections"), "prediction": ("table2.js
 def cmd_eval(args) -> int:
     """Evaluate a trained net: its paper table and pictures.
 
-    Prediction without --run evaluates the weights shipped in the package, writing to --out.
+    Without --run, the weights shipped in the package are evaluated, writing to --out.
     """
+    if args.net == "futures":
+        return cmd_futures(args)
     if args.net == "recognition":
-        from afford.recognition.evaluate import evaluate, format_table
+        from afford.recognition.evaluate import evaluate, evaluate_shipped, format_table
 
-        _check_run(args.run)
-        result = evaluate(args.run, args.data, checkpoint=args.checkpoint)
-        folder = Path(args.run)
+        if args.run is None:
+            folder = Path(args.out)
+            result = evaluate_shipped(args.data, folder)
+        else:
+            _check_run(args.run)
+            result, folder = evaluate(args.run, args.data, checkpoint=args.checkpoint), Path(args.run)
     else:
         from afford.prediction.evaluate import evaluate, format_table
 
@@ -68,17 +80,52 @@ def cmd_eval(args) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         recognizer = None
         if not args.no_futures:
-            from afford.planning.learned import load_learned
-
-            recognizer, _ = load_learned(args.recognition)
+            recognizer, _ = _load_weights(args.recognition)
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
-    record, pictures = EVALS[args.net]
+    _report(args, result, folder, *EVALS[args.net], format_table(result))
+    return 0
+
+
+def _report(args, result: dict, folder: Path, record: str, pictures: str, text: str) -> None:
+    """Write RECORD in the folder; print JSON or the table and where the pictures are."""
+    folder.mkdir(parents=True, exist_ok=True)
     (folder / record).write_text(json.dumps(result, indent=2) + "\n")
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(format_table(result))
+        print(text)
         print(f"pictures: {folder / pictures}/; record: {folder / record}")
+
+
+def _load_weights(weights: str | None):
+    from afford.cli.main import CLIError
+    from afford.planning.learned import load_learned
+
+    try:
+        return load_learned(weights)
+    except FileNotFoundError as e:
+        raise CLIError(str(e)) from None
+
+
+def cmd_futures(args) -> int:
+    """Recognition on predicted futures, beside the true states and copying the start."""
+    import torch
+
+    from afford.data.format import Dataset
+    from afford.prediction.futures import BASELINES, format_report, future_recall, net_predictor, pictures
+
+    recognizer, net = _load_weights(args.weights)
+    torch.set_num_threads(net.config.threads)
+    data = Dataset(args.data)
+    folder = Path(args.out)
+    result = {
+        "weights": args.weights or "shipped",
+        "threshold": recognizer.threshold,
+        "net": future_recall(net_predictor(net), recognizer, data, "test", args.limit),
+        "copy": future_recall(BASELINES["copy"], recognizer, data, "test", args.limit),
+    }
+    result["pictures"] = pictures(net_predictor(net), recognizer, data, folder / "futures")
+    _report(args, result, folder, "futures.json", "futures", format_report(result))
     return 0
 
 
@@ -139,6 +186,18 @@ def add_parsers(sub) -> None:
         p.add_argument("--out", required=True, metavar="RUN", help="run folder (checkpoints, logs)")
         p.add_argument("--steps", type=int, help="override the preset's number of batches")
         p.add_argument("--threads", type=int, help="torch threads (default: the preset's)")
+        p.add_argument(
+            "--set",
+            action="append",
+            metavar="KEY=VALUE",
+            help="change one field of the preset's config (repeatable), e.g. --set lr=3e-4; "
+            "a tuple as a comma list",
+        )
+        p.add_argument(
+            "--init",
+            metavar="CHECKPOINT",
+            help="start a new run from these weights (fine-tuning; same architecture)",
+        )
         p.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
         if net == "prediction":
             p.add_argument(
@@ -153,7 +212,8 @@ def add_parsers(sub) -> None:
     r = esub.add_parser(
         "recognition",
         help="the paper's Table 1",
-        description="Tune the confidence cut-off on val (saved in RUN/threshold.json), then report the "
+        description="With --run: tune the confidence cut-off on val (saved in RUN/threshold.json); "
+        "without: the shipped weights with their shipped cut-off. Then report the "
         "paper's Table 1 on test and on 100 training examples: recall per type (right type, within 2.5 cm "
         "and 5 degrees; any angle for a symmetric affordance) and spurious detections per image. Writes "
         "Fig. 6-style pictures to RUN/detections/.",
@@ -166,19 +226,42 @@ def add_parsers(sub) -> None:
         "sequences, beside copying the input. Writes Fig. 7-style pictures of canonical and non-canonical "
         "effects to RUN/predictions/.",
     )
-    r.add_argument("--run", required=True, metavar="RUN")
-    p.add_argument(
-        "--run", metavar="RUN", help="a training run (default: the weights shipped in the package)"
-    )
-    p.add_argument(
-        "--out", default="out/eval-prediction", metavar="DIR", help="where results go without --run"
-    )
+    for q, name in ((r, "recognition"), (p, "prediction")):
+        q.add_argument(
+            "--run", metavar="RUN", help="a training run (default: the weights shipped in the package)"
+        )
+        q.add_argument(
+            "--out", default=f"out/eval-{name}", metavar="DIR", help="where results go without --run"
+        )
     p.add_argument(
         "--recognition",
         metavar="DIR",
         help="weights folder whose recognition net runs on the predicted states (default: the shipped one)",
     )
     p.add_argument("--no-futures", action="store_true", help="skip recognition on the predicted states")
+    f = esub.add_parser(
+        "futures",
+        help="recognition on predicted states",
+        description="Future-affordance recall, a measure the paper lacks: each test sequence is rolled out "
+        "by the prediction net from its first image through its executed actions, the recognition net runs "
+        "on every predicted state, and its detections are scored against the true state's affordances by "
+        "Table 1's criteria (recall, spurious per image), per step 1-4, beside the same net on the true "
+        "states and on the start image copied forward. Writes Fig. 6-style pictures of detections on "
+        "predicted states to OUT/futures/.",
+    )
+    f.add_argument("--data", required=True, metavar="DIR")
+    f.add_argument(
+        "--weights",
+        metavar="DIR",
+        help="a weights folder from `afford export`, or one holding recognition/ and prediction/ runs "
+        "(default: the shipped weights)",
+    )
+    f.add_argument(
+        "--limit", type=int, metavar="N", help="evaluate N test sequences, evenly spread (default all)"
+    )
+    f.add_argument("--out", default="out/eval-futures", metavar="DIR")
+    f.add_argument("--json", action="store_true")
+    f.set_defaults(func=cmd_eval)
     for q in (r, p):
         q.add_argument("--data", required=True, metavar="DIR")
         q.add_argument(

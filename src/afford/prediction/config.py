@@ -44,6 +44,9 @@ class PredictionConfig:
     loss_l1: float = 0.0
     loss_mask: float = 0.0
     loss_values: float = 0.0
+    # The mask and values terms' "changed": from the true previous state (False), or from the
+    # step's own input, the previous prediction, so D learns to repair earlier errors (True).
+    repair: bool = False
     optimizer: str = "adam"  # "signsgd" as the paper, or "adam"
     lr: float = 1e-3
     batch_size: int = 32

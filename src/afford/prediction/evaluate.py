@@ -100,9 +100,9 @@ def evaluate(
         result[split] = table(errors(net, data, split, limit)[0])
         result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
     if recognizer is not None:
-        from afford.prediction.futures import future_recall
+        from afford.prediction.futures import future_recall, net_predictor
 
-        result["future_recall"] = future_recall(net, recognizer, data, "test")
+        result["future_recall"] = future_recall(net_predictor(net), recognizer, data, "test")
     if pictures is not None:
         result["pictures"] = event_pictures(net, data, pictures)
     return result

@@ -15,6 +15,7 @@ from afford.data.torch_data import PredictionData, collate_prediction, worker_in
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
+from afford.training.checkpoint import load_model_state, read_checkpoint
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
 
@@ -26,6 +27,16 @@ def step_mask(steps: torch.Tensor, longest: int) -> torch.Tensor:
     return (torch.arange(longest)[None, :] < steps[:, None]).float()
 
 
+def change_mask(images: torch.Tensor, predicted: torch.Tensor, repair: bool) -> torch.Tensor:
+    """(B, L, 1, H, W) 1 where the truth images[:, 1:] differs by more than CHANGED from each
+    step's input: the true previous state, or with `repair` the step's real input (the true
+    state at the first step, the previous prediction after)."""
+    inputs = images[:, :-1]
+    if repair:
+        inputs = torch.cat([images[:, :1], predicted[:, :-1].detach()], 1)
+    return ((images[:, 1:] - inputs).abs().amax(2, keepdim=True) > CHANGED).float()
+
+
 def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor):
     """The training loss, mean over the real steps of the batch (padded steps are not run).
 
@@ -35,6 +46,11 @@ def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tenso
     D's new values against the truth where it changed. The last two reach D even where the
     mask is shut: through eq. (3) alone, a closed mask passes no gradient to the values it
     would let through, and values that never learn give the mask no reason to open.
+
+    "Where it changed" is measured from the true previous state, or with `config.repair` from
+    the step's own input (the previous prediction): then the mask is also taught to open, and
+    D to redraw, where an earlier step left an error (a ghost, a blurred object), instead of
+    being taught to keep such errors shut in, so they stop compounding through eq. (3).
     """
     c = net.config
     with torch.autocast("cpu", dtype=torch.bfloat16, enabled=c.bf16):
@@ -46,7 +62,7 @@ def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tenso
     if c.loss_l1:
         err = err + c.loss_l1 * diff.abs().sum(2).mean((-2, -1))
     if c.loss_mask or c.loss_values:
-        changed = ((truth - images[:, :-1]).abs().amax(2, keepdim=True) > CHANGED).float()
+        changed = change_mask(images, predicted, c.repair)
         if c.loss_mask:
             err = err + c.loss_mask * ((differences[:, :, -1:] - changed) ** 2).mean((-3, -2, -1))
         if c.loss_values:
@@ -65,8 +81,14 @@ def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.
 
 
 def train(
-    data_dir: str | Path, config: PredictionConfig, run_dir: str | Path, progress: bool = True
+    data_dir: str | Path,
+    config: PredictionConfig,
+    run_dir: str | Path,
+    progress: bool = True,
+    init: str | Path | None = None,
 ) -> LoopState:
+    """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
+    another checkpoint's weights (fine-tuning), which must have the same architecture."""
     torch.set_num_threads(config.threads)
     torch.manual_seed(0)
     data = Dataset(data_dir)
@@ -102,6 +124,9 @@ def train(
         **workers,
     )
     net = PredictionNet(config)
+    if init is not None:
+        tensors, _ = read_checkpoint(init, "prediction")
+        load_model_state(net, tensors, init)
     opt = make_optimizer(net, config)
 
     def train_step(batch):

@@ -18,8 +18,12 @@ class RecognitionConfig:
     anchors: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)  # angle anchors, degrees
     types: tuple[str, ...] = TYPES
     image_size: int = 128
-    # Targets and losses. The confidence target is 1 at assigned cells (the authors lower it
-    # with the regression error; a plain 1 trained well enough here).
+    # Targets and losses. The confidence target at an assigned cell: 1 - conf_quality +
+    # conf_quality * the quality of the cell's regression (targets.quality: Gaussians of its
+    # position and angle errors, widths below); 0 keeps a plain 1.
+    conf_quality: float = 0.0
+    quality_cells: float = 0.6  # half of Table 1's 2.5 cm (4.9 px, 1.2 cells)
+    quality_degrees: float = 2.5  # half of Table 1's 5 degrees
     neighbours: bool = True  # a target also goes to the 2 nearest neighbour cells (YOLO)
     z_scale: float = 10.0  # z (metres) is regressed as z * z_scale
     w_conf: float = 1.0
@@ -28,6 +32,9 @@ class RecognitionConfig:
     w_angle: float = 1.0
     w_z: float = 1.0
     w_sym: float = 0.5
+    # Per type (in `types` order): the weight of an affordance's confidence, type and
+    # regression terms. Turns are 4% of the affordances and the type recognised worst.
+    type_weights: tuple[float, ...] = (1.0, 1.0, 1.0)
     # Inference.
     confidence: float = 0.5  # default cut-off; `afford eval recognition` tunes it on val
     suppress_radius: float = 0.025  # metres: duplicates closer than this ...

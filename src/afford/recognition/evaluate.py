@@ -61,6 +61,7 @@ def tune_threshold(recognizer: Recognizer, data: Dataset) -> tuple[float, list[d
 def evaluate(
     run: str | Path, data_dir: str | Path, pictures: int = 6, checkpoint: str = "best.safetensors"
 ) -> dict:
+    """Tune a training run's cut-off on val (saved in the run), then Table 1."""
     run = Path(run)
     recognizer = Recognizer.from_run(run, checkpoint)
     data = Dataset(data_dir)
@@ -68,12 +69,28 @@ def evaluate(
     recognizer.threshold = threshold
     (run / THRESHOLD_FILE).write_text(json.dumps({"threshold": threshold, "tuned_on": "val"}) + "\n")
     result = {"run": str(run), "checkpoint": checkpoint, "threshold": threshold, "val_sweep": sweep}
+    return result | table1(recognizer, data, run / "detections", pictures)
+
+
+def evaluate_shipped(data_dir: str | Path, out: Path, pictures: int = 6) -> dict:
+    """Table 1 for the weights shipped in the package, at their shipped cut-off (nothing is
+    tuned: a user checks the shipped net on their own data)."""
+    from afford.planning.learned import load_learned
+
+    recognizer, _ = load_learned()
+    result = {"run": "shipped", "threshold": recognizer.threshold}
+    return result | table1(recognizer, Dataset(data_dir), out / "detections", pictures)
+
+
+def table1(recognizer: Recognizer, data: Dataset, picture_dir: Path, pictures: int) -> dict:
+    """Table 1 on test and on 100 training states, with Fig. 6-style test pictures."""
+    result = {}
     for name, split, limit in (("test", "test", None), ("train", "train", TRAIN_EXAMPLES)):
         items = _states(data, split, limit)
         _, images, detections, truths = _run(recognizer, data, items)
         result[name] = tally(detections, truths).table()
         if name == "test" and pictures:
-            result["pictures"] = _pictures(images, detections, truths, run / "detections", pictures)
+            result["pictures"] = _pictures(images, detections, truths, picture_dir, pictures)
     return result
 
 
@@ -101,7 +118,8 @@ def _pictures(images, detections, truths, out: Path, n: int) -> list[str]:
 
 
 def format_table(result: dict) -> str:
-    lines = [f"confidence cut-off {result['threshold']:.2f} (tuned on val)", ""]
+    tuned = "tuned on val" if "val_sweep" in result else "shipped"
+    lines = [f"confidence cut-off {result['threshold']:.2f} ({tuned})", ""]
     lines.append(f"{'':8s} {'grasp':>18s} {'place':>18s} {'turn':>18s} {'all':>18s} {'spurious/img':>13s}")
     for name in ("test", "train"):
         r = result[name]["recall"]

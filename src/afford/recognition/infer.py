@@ -10,7 +10,7 @@ import numpy as np
 import torch
 
 from afford.recognition.config import RecognitionConfig
-from afford.recognition.model import RecognitionNet
+from afford.recognition.model import RecognitionNet, fused_for_inference
 from afford.recognition.targets import Detection, decode, suppress
 from afford.training.checkpoint import load_net_from_checkpoint
 
@@ -26,7 +26,7 @@ class Recognizer:
     """Batched inference with the tuned cut-off and suppression (paper II.B)."""
 
     def __init__(self, net: RecognitionNet, config: RecognitionConfig, threshold: float | None = None):
-        self.net = net.eval()
+        self.net = fused_for_inference(net.eval())
         self.config = config
         self.threshold = config.confidence if threshold is None else threshold
 

@@ -10,8 +10,11 @@ regressions per type let each keep its own z and angle.)
 
 from __future__ import annotations
 
+import copy
+
 import torch
 from torch import nn
+from torch.nn.utils.fusion import fuse_conv_bn_eval
 
 from afford.recognition.config import RecognitionConfig
 
@@ -117,3 +120,41 @@ class RecognitionNet(nn.Module):
         out = self.head(p4).permute(0, 2, 3, 1)  # (B, G, G, anchors * outputs)
         b, g = out.shape[:2]
         return out.reshape(b, g, g, len(c.anchors), self.n_out).permute(0, 3, 1, 2, 4)
+
+
+# ---------------------------------------------------------------------------- inference
+def _bn_slice(bn: nn.BatchNorm2d, start: int, stop: int) -> nn.BatchNorm2d:
+    part = nn.BatchNorm2d(stop - start, eps=bn.eps).eval()
+    with torch.no_grad():
+        for name in ("weight", "bias", "running_mean", "running_var"):
+            getattr(part, name).copy_(getattr(bn, name)[start:stop])
+    return part
+
+
+def _fold(conv: nn.Conv2d, bn: nn.BatchNorm2d) -> nn.Conv2d:
+    return fuse_conv_bn_eval(conv.eval(), bn.eval())
+
+
+@torch.no_grad()
+def fused_for_inference(net: RecognitionNet) -> RecognitionNet:
+    """A copy of `net` for inference with every batch norm folded into the convolution before
+    it: the same outputs (to float rounding), one pass over memory less per layer.
+
+    A CSP block normalises the concatenation of two branches, each channel made by one of two
+    convolutions, so each half of that norm folds into its own branch's last convolution.
+    """
+    fused = copy.deepcopy(net).eval()
+    for module in list(fused.modules()):
+        if isinstance(module, ConvBNMish):
+            module[0] = _fold(module[0], module[1])
+            module[1] = nn.Identity()
+        elif isinstance(module, (CSPStage, SPPCSP)):
+            bn, h = module.merge[0], module.bypass.out_channels
+            last = module.main[-1] if isinstance(module, CSPStage) else None
+            if last is not None:
+                module.main[-1] = _fold(last, _bn_slice(bn, 0, h))
+            else:  # SPP-CSP: the main branch ends on its post block's Mish, so keep the norm there
+                module.post.append(_bn_slice(bn, 0, h))
+            module.bypass = _fold(module.bypass, _bn_slice(bn, h, 2 * h))
+            module.merge[0] = nn.Identity()
+    return fused.to(memory_format=torch.channels_last)

@@ -92,26 +92,64 @@ def _split(raw: torch.Tensor, config: RecognitionConfig):
     return conf, type_logits, xy, angle, reg[..., 3], reg[..., 4]
 
 
+def quality(
+    xy: torch.Tensor, angle: torch.Tensor, targets: Targets, config: RecognitionConfig
+) -> torch.Tensor:
+    """(B, A, G, G) how well each positive cell's own regression hits its affordance, in (0, 1]:
+    a Gaussian of its position error (cells) and angle error (degrees; none for a symmetric
+    one), widths half Table 1's hit criteria; the best of its types. 0 at negative cells."""
+    d_xy = (xy - targets.reg[..., :2]).norm(dim=-1)  # (B, A, G, G, T)
+    d_angle = (angle - targets.reg[..., 2]) * ANCHOR_HALF_WIDTH * (1 - targets.reg[..., 4])
+    q = torch.exp(-0.5 * (d_xy / config.quality_cells) ** 2 - 0.5 * (d_angle / config.quality_degrees) ** 2)
+    return (q * targets.reg_mask).amax(-1)
+
+
 def loss(
     raw: torch.Tensor, targets: Targets, config: RecognitionConfig
 ) -> tuple[torch.Tensor, dict[str, float]]:
-    """BCE for confidence and type, MSE for offsets, angle, z and symmetry (paper II.B)."""
+    """BCE for confidence and type, MSE for offsets, angle, z and symmetry (paper II.B), each
+    true affordance's terms weighted by `config.type_weights` (a rare type weighs more).
+
+    With `config.conf_quality` the confidence target at a positive cell is lowered by how far
+    off the cell's own regression is (the authors' choice, from YOLO): of the cells that claim
+    an affordance, the most accurate then scores highest and survives suppression, and a cell
+    whose angle is off scores low instead of becoming a confident spurious detection."""
     conf, type_logits, xy, angle, z, sym = _split(raw, config)
+    type_weights = raw.new_tensor(config.type_weights)
+    # A positive cell weighs as its heaviest type; negatives weigh 1.
+    cell_weight = torch.where(
+        targets.obj > 0, (targets.types * type_weights).amax(-1), torch.ones_like(targets.obj)
+    )
     n_pos = targets.obj.sum().clamp(min=1.0)
-    l_conf = F.binary_cross_entropy_with_logits(conf, targets.obj, reduction="sum") / n_pos
+    conf_target = targets.obj
+    if config.conf_quality:
+        mix = config.conf_quality
+        conf_target = targets.obj * ((1 - mix) + mix * quality(xy, angle, targets, config).detach())
+    l_conf = (
+        F.binary_cross_entropy_with_logits(conf, conf_target, reduction="none") * cell_weight
+    ).sum() / n_pos
     pos = targets.obj > 0
     l_type = (
-        F.binary_cross_entropy_with_logits(type_logits[pos], targets.types[pos])
+        (
+            F.binary_cross_entropy_with_logits(type_logits[pos], targets.types[pos], reduction="none")
+            * cell_weight[pos][:, None]
+        ).mean()
         if pos.any()
         else raw.sum() * 0
     )
     m = targets.reg_mask
     if m.any():
         tr = targets.reg[m]
-        l_xy = F.mse_loss(xy[m], tr[:, :2])
-        l_angle = F.mse_loss(angle[m], tr[:, 2])
-        l_z = F.mse_loss(z[m], tr[:, 3])
-        l_sym = F.mse_loss(torch.sigmoid(sym[m]), tr[:, 4])
+        w = type_weights.expand(m.shape)[m]  # each supervised entry weighs as its type
+
+        def weighted_mse(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+            se = (pred - target) ** 2
+            return (se * (w[:, None] if se.ndim == 2 else w)).mean()
+
+        l_xy = weighted_mse(xy[m], tr[:, :2])
+        l_angle = weighted_mse(angle[m], tr[:, 2])
+        l_z = weighted_mse(z[m], tr[:, 3])
+        l_sym = weighted_mse(torch.sigmoid(sym[m]), tr[:, 4])
     else:
         l_xy = l_angle = l_z = l_sym = raw.sum() * 0
     total = (

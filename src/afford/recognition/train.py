@@ -17,6 +17,7 @@ from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
+from afford.training.checkpoint import load_model_state, read_checkpoint
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
@@ -29,8 +30,14 @@ def rows_to_affordances(rows: torch.Tensor | np.ndarray) -> list[Affordance]:
 
 
 def train(
-    data_dir: str | Path, config: RecognitionConfig, run_dir: str | Path, progress: bool = True
+    data_dir: str | Path,
+    config: RecognitionConfig,
+    run_dir: str | Path,
+    progress: bool = True,
+    init: str | Path | None = None,
 ) -> LoopState:
+    """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
+    another checkpoint's weights (fine-tuning), which must have the same architecture."""
     torch.set_num_threads(config.threads)
     torch.manual_seed(0)
     data = Dataset(data_dir)
@@ -43,6 +50,9 @@ def train(
         train_set, batch_size=config.batch_size, shuffle=True, drop_last=True, collate_fn=collate_recognition
     )
     net = RecognitionNet(config)
+    if init is not None:
+        tensors, _ = read_checkpoint(init, "recognition")
+        load_model_state(net, tensors, init)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
 
     def train_step(batch):

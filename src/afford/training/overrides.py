@@ -1,0 +1,45 @@
+"""`--set KEY=VALUE`: a config field changed from the command line, typed by the field."""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+
+class OverrideError(ValueError):
+    """A --set that names no field of the config, or a value of the wrong type."""
+
+
+_TRUE, _FALSE = {"1", "true", "yes", "on"}, {"0", "false", "no", "off"}
+
+
+def _parse(text: str, kind) -> object:
+    if kind is bool:
+        if text.lower() in _TRUE | _FALSE:
+            return text.lower() in _TRUE
+        raise ValueError(f"{text!r} is not a boolean (true/false)")
+    if typing.get_origin(kind) is tuple:
+        item = typing.get_args(kind)[0]
+        return tuple(_parse(t.strip(), item) for t in text.split(",") if t.strip())
+    return kind(text)
+
+
+def apply_overrides(config, pairs: list[str] | None):
+    """A copy of the frozen dataclass `config` with each "KEY=VALUE" of `pairs` applied."""
+    if not pairs:
+        return config
+    hints = typing.get_type_hints(type(config))
+    names = {f.name for f in dataclasses.fields(config)}
+    changes = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        key = key.strip()
+        if not sep or key not in names:
+            raise OverrideError(
+                f"--set {pair!r}: expected KEY=VALUE with KEY one of: {', '.join(sorted(names))}"
+            )
+        try:
+            changes[key] = _parse(value.strip(), hints[key])
+        except ValueError as e:
+            raise OverrideError(f"--set {pair!r}: {e}") from None
+    return dataclasses.replace(config, **changes)

@@ -1,4 +1,5 @@
-"""Future-affordance recall (`afford eval futures`) on a small real dataset, shipped weights."""
+"""Evaluation with the shipped weights: future-affordance recall (`afford eval futures`) and
+Table 1 at the shipped cut-off, on a small real dataset."""
 
 from __future__ import annotations
 
@@ -44,3 +45,11 @@ def test_eval_futures_cli(small_dataset, tmp_path, capsys):
     assert report["net"]["1"]["true"]["recall"]["all"]["total"] > 0
     assert all((out / "futures" / p.split("/")[-1]).is_file() for p in report["pictures"])
     assert main(["eval", "futures", "--data", str(tmp_path / "none")]) == 2
+
+
+def test_eval_recognition_without_a_run_uses_the_shipped_cut_off(small_dataset, tmp_path, capsys, recognizer):
+    out = tmp_path / "rec"
+    assert main(["eval", "recognition", "--data", str(small_dataset), "--out", str(out), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["threshold"] == recognizer.threshold and "val_sweep" not in report
+    assert report["test"]["recall"]["all"]["total"] > 0 and (out / "table1.json").is_file()

@@ -1,4 +1,4 @@
-"""`afford generate` and `afford data info|show|verify`."""
+"""`afford generate` and `afford data info|show|verify|predict`."""
 
 from __future__ import annotations
 
@@ -147,6 +147,31 @@ def cmd_data_verify(args) -> int:
     return 1 if problems else 0
 
 
+def cmd_data_predict(args) -> int:
+    """Predicted states of a split, for `afford train recognition --predicted`."""
+    import torch
+
+    from afford.data.format import Dataset
+    from afford.data.predicted import predict_states
+    from afford.planning.learned import PREDICTION_FILE, WEIGHTS
+    from afford.prediction.evaluate import load_net
+
+    if args.sequences is not None and args.sequences < 1:
+        from afford.cli.main import CLIError
+
+        raise CLIError("--sequences must be at least 1")
+    data = Dataset(args.dir)
+    checkpoint = Path(args.prediction) if args.prediction else WEIGHTS / PREDICTION_FILE
+    net, config = load_net(checkpoint)
+    torch.set_num_threads(config.threads)
+    n = predict_states(
+        net, data, args.split, args.out, args.sequences, progress=not args.json, source=str(checkpoint)
+    )
+    record = {"out": args.out, "states": n, "split": args.split}
+    print(json.dumps(record, indent=2) if args.json else f"{args.out}: {n} predicted {args.split} states")
+    return 0
+
+
 def add_parsers(sub) -> None:
     g = sub.add_parser(
         "generate",
@@ -189,3 +214,19 @@ def add_parsers(sub) -> None:
     v.add_argument("dir", metavar="DIR")
     v.add_argument("--json", action="store_true")
     v.set_defaults(func=cmd_data_verify)
+    p = dsub.add_parser(
+        "predict",
+        help="predicted states of a split, to train recognition on",
+        description="Roll each sequence of a split out with a prediction net from its first state "
+        "through its executed actions and write every predicted state to one .npz; each is labelled "
+        "by the true state's affordances of the same step (`afford train recognition --predicted`).",
+    )
+    p.add_argument("dir", metavar="DIR")
+    p.add_argument("--out", required=True, metavar="FILE.npz")
+    p.add_argument("--split", choices=("train", "val", "test"), default="train")
+    p.add_argument("--sequences", type=int, metavar="N", help="the split's first N sequences (default all)")
+    p.add_argument(
+        "--prediction", metavar="CHECKPOINT", help="prediction weights (default: the shipped ones)"
+    )
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_data_predict)

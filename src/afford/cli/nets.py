@@ -1,4 +1,4 @@
-"""`afford train recognition|prediction` and `afford eval recognition|prediction`."""
+"""`afford train recognition|prediction`, `afford eval recognition|prediction|futures`, `afford export`."""
 
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ def cmd_train(args) -> int:
     except OverrideError as e:
         raise CLIError(str(e)) from None
     try:
-        state = train(args.data, config, args.out, progress=not args.json, init=args.init)
+        extra = {"predicted": args.predicted} if args.net == "recognition" else {}
+        state = train(args.data, config, args.out, progress=not args.json, init=args.init, **extra)
     except KeyboardInterrupt:
         print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
         return 130
@@ -199,6 +200,13 @@ def add_parsers(sub) -> None:
             help="start a new run from these weights (fine-tuning; same architecture)",
         )
         p.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
+        if net == "recognition":
+            p.add_argument(
+                "--predicted",
+                metavar="FILE.npz",
+                help="also train on these predicted states (`afford data predict`), labelled by the "
+                "true states' affordances: predicted_fraction of the batches (--set to change)",
+            )
         if net == "prediction":
             p.add_argument(
                 "--no-affordance-pixel",

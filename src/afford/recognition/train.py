@@ -7,10 +7,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from torch.utils.data import DataLoader
+from torch.utils.data import ConcatDataset, DataLoader
 
 from afford.data.augment import AugmentConfig
 from afford.data.format import Dataset
+from afford.data.predicted import PredictedStates, mixed_sampler
 from afford.data.torch_data import RecognitionData, collate_recognition
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.metrics import Tally
@@ -35,9 +36,12 @@ def train(
     run_dir: str | Path,
     progress: bool = True,
     init: str | Path | None = None,
+    predicted: str | Path | None = None,
 ) -> LoopState:
     """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
-    another checkpoint's weights (fine-tuning), which must have the same architecture."""
+    another checkpoint's weights (fine-tuning), which must have the same architecture;
+    `predicted`: a file of predicted states (`data/predicted.py`) that make up
+    `config.predicted_fraction` of the batches, labelled by the true states' affordances."""
     torch.set_num_threads(config.threads)
     torch.manual_seed(0)
     data = Dataset(data_dir)
@@ -46,8 +50,13 @@ def train(
     val_set = RecognitionData(data, "val")
     n_val = min(VAL_IMAGES, len(val_set))
     val_batch = collate_recognition([val_set[i] for i in np.linspace(0, len(val_set) - 1, n_val).astype(int)])
+    order = {"shuffle": True}
+    if predicted is not None:
+        futures = PredictedStates(predicted, data, augment)
+        order = {"sampler": mixed_sampler(len(train_set), len(futures), config.predicted_fraction)}
+        train_set = ConcatDataset([train_set, futures])
     loader = DataLoader(
-        train_set, batch_size=config.batch_size, shuffle=True, drop_last=True, collate_fn=collate_recognition
+        train_set, batch_size=config.batch_size, drop_last=True, collate_fn=collate_recognition, **order
     )
     net = RecognitionNet(config)
     if init is not None:

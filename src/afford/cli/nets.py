@@ -113,19 +113,18 @@ def cmd_futures(args) -> int:
     import torch
 
     from afford.data.format import Dataset
-    from afford.prediction.futures import BASELINES, format_report, future_recall, net_predictor, pictures
+    from afford.prediction.futures import BASELINES, format_report, future_recalls, net_predictor, pictures
 
     recognizer, net = _load_weights(args.weights)
     torch.set_num_threads(net.config.threads)
     data = Dataset(args.data)
     folder = Path(args.out)
-    result = {
-        "weights": args.weights or "shipped",
-        "threshold": recognizer.threshold,
-        "net": future_recall(net_predictor(net), recognizer, data, "test", args.limit),
-        "copy": future_recall(BASELINES["copy"], recognizer, data, "test", args.limit),
-    }
-    result["pictures"] = pictures(net_predictor(net), recognizer, data, folder / "futures")
+    predict = net_predictor(net)
+    recalls = future_recalls(
+        {"net": predict, "copy": BASELINES["copy"]}, recognizer, data, "test", args.limit
+    )
+    result = {"weights": args.weights or "shipped", "threshold": recognizer.threshold, **recalls}
+    result["pictures"] = pictures(predict, recognizer, data, folder / "futures")
     _report(args, result, folder, "futures.json", "futures", format_report(result))
     return 0
 

@@ -51,33 +51,50 @@ def _runs(data: Dataset, split: str, limit: int | None) -> tuple[PredictionData,
     return runs, picks
 
 
-@torch.no_grad()
 def future_recall(
     predict: Predictor, recognizer: Recognizer, data: Dataset, split: str = "test", limit: int | None = None
 ) -> dict:
     """Per step 1-4: Table 1 on the predicted states and on the true states."""
+    return future_recalls({"net": predict}, recognizer, data, split, limit)["net"]
+
+
+@torch.no_grad()
+def future_recalls(
+    predictors: dict[str, Predictor],
+    recognizer: Recognizer,
+    data: Dataset,
+    split: str = "test",
+    limit: int | None = None,
+) -> dict[str, dict]:
+    """`future_recall` for several predictors on the same runs; the true states are
+    recognised once for all of them."""
     runs, picks = _runs(data, split, limit)
-    predicted_tally = [Tally() for _ in range(STEPS)]
+    predicted_tally = {name: [Tally() for _ in range(STEPS)] for name in predictors}
     true_tally = [Tally() for _ in range(STEPS)]
     for b in range(0, len(picks), BATCH):
         chunk = picks[b : b + BATCH]
         images, actions, steps = collate_prediction([runs[k] for k in chunk])
-        predicted = predict(images, actions, steps)
+        predicted = {name: predict(images, actions, steps) for name, predict in predictors.items()}
         for s in range(STEPS):
             rows = [j for j in range(len(chunk)) if steps[j] > s]
             if not rows:
                 continue
-            found_pred = recognizer(predicted[rows, s])
-            found_true = recognizer(images[rows, s + 1])
-            for j, dp, dt in zip(rows, found_pred, found_true, strict=True):
-                seq = data.sequence(runs.indices[chunk[j]])
-                truths = [decode_affordance(r) for r in seq.affordances[s + 1]]
-                predicted_tally[s].add(dp, truths)
-                true_tally[s].add(dt, truths)
+            truths = [
+                [decode_affordance(r) for r in data.sequence(runs.indices[chunk[j]]).affordances[s + 1]]
+                for j in rows
+            ]
+            for j, found in enumerate(recognizer(images[rows, s + 1])):
+                true_tally[s].add(found, truths[j])
+            for name, states in predicted.items():
+                for j, found in enumerate(recognizer(states[rows, s])):
+                    predicted_tally[name][s].add(found, truths[j])
     return {
-        str(s + 1): {"predicted": predicted_tally[s].table(), "true": true_tally[s].table()}
-        for s in range(STEPS)
-        if true_tally[s].images
+        name: {
+            str(s + 1): {"predicted": tallies[s].table(), "true": true_tally[s].table()}
+            for s in range(STEPS)
+            if true_tally[s].images
+        }
+        for name, tallies in predicted_tally.items()
     }
 
 

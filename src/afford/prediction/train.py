@@ -15,7 +15,6 @@ from afford.data.torch_data import PredictionData, collate_prediction, worker_in
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
-from afford.training.checkpoint import load_model_state, read_checkpoint
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
 
@@ -124,9 +123,6 @@ def train(
         **workers,
     )
     net = PredictionNet(config)
-    if init is not None:
-        tensors, _ = read_checkpoint(init, "prediction")
-        load_model_state(net, tensors, init)
     opt = make_optimizer(net, config)
 
     def train_step(batch):
@@ -147,6 +143,7 @@ def train(
 
     loop = Loop(
         kind="prediction",
+        init=init,
         config=config,
         model=net,
         optimizer=opt,

@@ -141,15 +141,10 @@ def loss(
     if m.any():
         tr = targets.reg[m]
         w = type_weights.expand(m.shape)[m]  # each supervised entry weighs as its type
-
-        def weighted_mse(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
-            se = (pred - target) ** 2
-            return (se * (w[:, None] if se.ndim == 2 else w)).mean()
-
-        l_xy = weighted_mse(xy[m], tr[:, :2])
-        l_angle = weighted_mse(angle[m], tr[:, 2])
-        l_z = weighted_mse(z[m], tr[:, 3])
-        l_sym = weighted_mse(torch.sigmoid(sym[m]), tr[:, 4])
+        l_xy = ((xy[m] - tr[:, :2]) ** 2 * w[:, None]).mean()
+        l_angle = ((angle[m] - tr[:, 2]) ** 2 * w).mean()
+        l_z = ((z[m] - tr[:, 3]) ** 2 * w).mean()
+        l_sym = ((torch.sigmoid(sym[m]) - tr[:, 4]) ** 2 * w).mean()
     else:
         l_xy = l_angle = l_z = l_sym = raw.sum() * 0
     total = (

@@ -18,7 +18,6 @@ from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
-from afford.training.checkpoint import load_model_state, read_checkpoint
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
@@ -59,9 +58,6 @@ def train(
         train_set, batch_size=config.batch_size, drop_last=True, collate_fn=collate_recognition, **order
     )
     net = RecognitionNet(config)
-    if init is not None:
-        tensors, _ = read_checkpoint(init, "recognition")
-        load_model_state(net, tensors, init)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
 
     def train_step(batch):
@@ -81,6 +77,7 @@ def train(
 
     loop = Loop(
         kind="recognition",
+        init=init,
         config=config,
         model=net,
         optimizer=opt,

@@ -1,7 +1,8 @@
 """One training loop for both nets: progress bar, logs, checkpoints, resumption after a kill.
 
 RUN/last.safetensors is rewritten at every evaluation (and on Ctrl-C); a re-run of the same
-command loads it and continues from its step. RUN/best.safetensors keeps the weights with the
+command loads it and continues from its step; a run without one starts from `Loop.init`'s
+weights when given (fine-tuning). RUN/best.safetensors keeps the weights with the
 lowest validation loss. RUN/config.json holds the config for people to read.
 """
 
@@ -50,6 +51,7 @@ class Loop:
     validate: Callable[[], dict[str, float]]  # must contain "loss"
     lr_at: Callable[[int], float] | None = None  # lr multiplier by step (warm-up, cosine)
     patience: int | None = None  # halve the lr after this many evaluations without improvement
+    init: str | Path | None = None  # a new run starts from these weights (fine-tuning)
 
 
 def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:
@@ -84,6 +86,8 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
         load_optimizer_state(loop.optimizer, tensors, meta)
         state = LoopState(**meta["extra"]["loop"])
         log.truncate_after(state.step)
+    elif loop.init is not None:
+        load_model_state(loop.model, read_checkpoint(loop.init, loop.kind)[0], loop.init)
     (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
 
     def save(path: str) -> None:

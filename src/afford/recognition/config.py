@@ -64,8 +64,8 @@ class RecognitionConfig:
 
 
 PRESETS = {
-    # About 40 min on 2 CPU cores (see README). Turns weigh 3 (4% of the affordances), the
-    # angle 4 (most misses were angles off by more than Table 1's 5 degrees), and the
+    # 5,000 batches in 46.5 min on 2 CPU cores (see README). Turns weigh 3 (4% of the affordances), the
+    # angle 4 (half the misses were angles off by more than Table 1's 5 degrees), and the
     # confidence learns the regression's quality: each measured in the README.
     "cpu": RecognitionConfig(w_angle=4.0, type_weights=(1.0, 1.0, 3.0), conf_quality=1.0),
     # The paper's widths: the default ScaledYOLOv4 (P5) halved.

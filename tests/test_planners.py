@@ -105,3 +105,39 @@ def test_random_tasks_are_not_solved_by_doing_nothing(scene):
         # The root image is scored against the goal like any other state: a finite loss.
         assert np.isfinite(task.goal.loss(scene.observe()[None])[0])
         assert execute_plan(scene, task.scene, (), task.success).success is False
+
+
+def test_symbolic_baseline_is_judged_by_all_its_equally_short_plans(scene):
+    # Task 4 (ball first, then cup): canonically the two orders are equally short, and only one
+    # keeps the block balanced. The baseline is judged by both, whatever the scan order.
+    t4 = load_task(PAPER / "04-counterbalance-ball-first.json", scene)
+    r = plan_symbolic(scene, t4.scene, t4.object_names(), t4.success, t4.max_steps)
+    assert r.total == 2 and len(r.plans) == 2 and len(set(r.plans)) == 2
+    assert r.plans[0][0].position != r.plans[1][0].position  # ball first in one, cup in the other
+    o = solve(t4, "symbolic", scene)
+    assert o.success_rate == 0.5 and o.tried == 2 and o.total == 2
+    # The seed picks which one is reported, not the score.
+    other = plan_symbolic(scene, t4.scene, t4.object_names(), t4.success, t4.max_steps, seed=1)
+    assert set(other.plans) == set(r.plans)
+
+
+def test_wilson_interval():
+    from afford.planning.random_bench import wilson
+
+    lo, hi = wilson(50, 100)
+    assert lo < 0.5 < hi and abs((0.5 - lo) - (hi - 0.5)) < 1e-9 and abs(hi - lo - 0.1924) < 1e-3
+    assert wilson(0, 20)[0] == 0.0 and wilson(20, 20)[1] == 1.0 and wilson(20, 20)[0] > 0.8
+
+
+def test_bench_random_cli_gives_intervals(tmp_path):
+    out = tmp_path / "random.json"
+    r = afford(
+        "bench", "random", "--n", "2", "--max-steps", "1", "--planner", "symbolic",
+        "--workers", "1", "--json", "--out", str(out),
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    summary = json.loads(r.stdout)["summary"]["symbolic"]
+    assert 0 <= summary["ci95"][0] <= summary["success"] <= summary["ci95"][1] <= 1
+    assert json.loads(out.read_text())["n"] == 2
+    bad = afford("bench", "random", "--time-limit", "0")
+    assert bad.returncode == 2 and "--time-limit" in bad.stderr

@@ -95,3 +95,22 @@ def test_ties_go_to_the_shorter_plan():
     r = search(world, Goal(picture(2)[..., :3].copy()), max_steps=3, config=QUIET)
     assert r.nodes[r.best].state == 2 and len(r.plan) == 1
     assert [n.state for n in r.path()] == [0, 2]
+
+
+class SlowWorld(LineWorld):
+    """LineWorld whose every prediction takes a while: the time limit must stop the tree."""
+
+    def predict(self, parents, actions):
+        import time
+
+        time.sleep(0.02 * len(parents))
+        return super().predict(parents, actions)
+
+
+def test_time_limit_stops_the_tree_and_still_plans():
+    goal = Goal(picture(4))
+    free = search(SlowWorld(), goal, 3, SearchConfig(progress=False, batch_size=1))
+    assert not free.truncated and len(free.per_depth) == 4
+    cut = search(SlowWorld(), goal, 3, SearchConfig(progress=False, batch_size=1, time_limit=0.05))
+    assert cut.truncated and len(cut.nodes) < len(free.nodes)
+    assert cut.best < len(cut.nodes)  # a plan from the states grown so far

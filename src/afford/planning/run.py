@@ -35,19 +35,36 @@ class Outcome:
     loss: float | None = None
     reason: str = ""
     steps_executed: list[bool] = field(default_factory=list)
+    # Symbolic only: of its equally short canonical plans (`tried` executed of `total`), the
+    # share that succeed. `success` is the first of them, a seeded random tie-break.
+    success_rate: float | None = None
+    tried: int = 0
+    total: int = 0
+    truncated: bool = False  # the search's time limit stopped the tree early
 
     def to_dict(self) -> dict:
-        return {
-            "task": self.task,
-            "planner": self.planner,
-            "solved": self.success,
-            "plan": None if self.plan is None else [a.to_dict() for a in self.plan],
-            "plan_length": None if self.plan is None else len(self.plan),
-            "nodes": self.nodes,
-            "planning_seconds": round(self.seconds, 2),
-            "goal_loss": None if self.loss is None else round(self.loss, 6),
-            "reason": self.reason,
-        }
+        fair = {}
+        if self.success_rate is not None:
+            fair = {
+                "success_rate": round(self.success_rate, 4),
+                "plans_tried": self.tried,
+                "plans_total": self.total,
+            }
+        return (
+            fair
+            | {
+                "task": self.task,
+                "planner": self.planner,
+                "solved": self.success,
+                "plan": None if self.plan is None else [a.to_dict() for a in self.plan],
+                "plan_length": None if self.plan is None else len(self.plan),
+                "nodes": self.nodes,
+                "planning_seconds": round(self.seconds, 2),
+                "goal_loss": None if self.loss is None else round(self.loss, 6),
+                "reason": self.reason,
+            }
+            | ({"truncated": True} if self.truncated else {})
+        )
 
 
 def solve(
@@ -89,6 +106,7 @@ def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConf
         result.loss,
         reason,
         ex.executed,
+        truncated=result.truncated,
     )
 
 
@@ -108,14 +126,23 @@ def _solve_symbolic(task: Task, scene: Scene) -> Outcome:
             result.expanded,
             result.seconds,
             reason=f"no plan of at most {task.max_steps} steps reaches the goal by canonical effects",
+            success_rate=0.0,
         )
     world = CanonicalWorld(scene, task.scene, names)
     planned = []
     for state in result.trace:
         world.realise(state)
         planned.append(scene.observe())
+    # The others first, so that the scene ends on the plan the outcome reports.
+    others = [execute_plan(scene, task.scene, plan, task.success).success for plan in result.plans[1:]]
     ex = execute_plan(scene, task.scene, result.plan, task.success)
     reason = "" if ex.success else _deviation(scene, result.predicted, names)
+    rate = (ex.success + sum(others)) / len(result.plans)
+    if len(result.plans) > 1:
+        reason = (reason + "; " if reason else "") + (
+            f"{rate:.0%} of {len(result.plans)} equally short canonical plans succeed"
+            + (f" (sampled from {result.total})" if result.total > len(result.plans) else "")
+        )
     return Outcome(
         task.name,
         "symbolic",
@@ -127,6 +154,9 @@ def _solve_symbolic(task: Task, scene: Scene) -> Outcome:
         result.seconds,
         reason=reason,
         steps_executed=ex.executed,
+        success_rate=rate,
+        tried=len(result.plans),
+        total=result.total,
     )
 
 

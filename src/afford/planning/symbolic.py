@@ -18,7 +18,6 @@ predicate holds on the canonical state. A symbolic state has no view: the predic
 from __future__ import annotations
 
 import time
-from collections import deque
 from dataclasses import dataclass, field
 
 import mujoco
@@ -30,6 +29,8 @@ from afford.sim.affordances import Affordance
 from afford.sim.camera import world_to_pixel
 from afford.sim.constants import MOTION
 from afford.sim.scene import ObjectSpec, Scene
+
+SYMBOLIC_SAMPLES = 8  # shortest canonical plans executed to judge the baseline
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,12 @@ class SymbolicResult:
     seconds: float
     predicted: SymbolicState | None = None  # the canonical end state of the plan
     trace: list[SymbolicState] = field(default_factory=list)
+    # Every shortest canonical plan is equally good to this planner: `total` of them reach the
+    # success predicate; `plans` is a seeded uniform sample of them (all when few), `plan` its
+    # first. Judging the baseline by all of them keeps its score from hinging on which object
+    # the detector lists first.
+    plans: list[tuple[Affordance, ...]] = field(default_factory=list)
+    total: int = 0
 
 
 def _rot_z(deg: float) -> np.ndarray:
@@ -190,36 +197,91 @@ def scan_order(affs: list[Affordance]) -> list[Affordance]:
     return sorted(affs, key=lambda a: tuple(np.floor(world_to_pixel(np.asarray(a.position))[::-1])))
 
 
+@dataclass
+class _Entry:
+    """A state of one BFS level and every (parent key, action) that reaches it from the level above."""
+
+    state: SymbolicState
+    parents: list[tuple[tuple, Affordance]] = field(default_factory=list)
+    paths: int = 0  # shortest plans from the start to this state
+
+
 def plan_symbolic(
-    scene: Scene, specs: list[ObjectSpec], names: list[str], success: Predicate, max_steps: int
+    scene: Scene,
+    specs: list[ObjectSpec],
+    names: list[str],
+    success: Predicate,
+    max_steps: int,
+    samples: int = SYMBOLIC_SAMPLES,
+    seed: int = 0,
 ) -> SymbolicResult:
-    """Breadth-first search over canonical effects for the shortest plan to `success`."""
+    """Breadth-first search over canonical effects for the shortest plans to `success`.
+
+    The search finishes the level where the predicate first holds, keeping every way into each
+    state of a level, so it knows all shortest plans; it returns `samples` of them drawn
+    uniformly with `seed` (a state seen on an earlier level is not a way to a shortest plan)."""
     start_time = time.perf_counter()
     world = CanonicalWorld(scene, specs, names)
-    queue: deque[tuple[SymbolicState, tuple[Affordance, ...], list[SymbolicState]]] = deque(
-        [(world.start, (), [world.start])]
-    )
-    seen = {world.start.key()}
+    levels = [{world.start.key(): _Entry(world.start, paths=1)}]
+    seen = set(levels[0])
     expanded = 0
-    world.realise(world.start)
-    if success.holds(scene, see=False):
-        return SymbolicResult((), 0, time.perf_counter() - start_time, world.start, [world.start])
-    while queue:
-        state, plan, trace = queue.popleft()
-        if len(plan) >= max_steps:
-            continue
-        world.realise(state)
-        actions = edges([(a, 1.0) for a in scan_order(scene.affordances())], merge_radius=0.01)
-        expanded += 1
-        for aff in actions:
-            child = world.apply(state, aff)
-            if child is None or child.key() in seen:
-                continue
-            seen.add(child.key())
-            world.realise(child)
+    for depth in range(max_steps + 1):
+        goals = []
+        for key, entry in levels[depth].items():
+            world.realise(entry.state)
             if success.holds(scene, see=False):
-                return SymbolicResult(
-                    plan + (aff,), expanded, time.perf_counter() - start_time, child, trace + [child]
-                )
-            queue.append((child, plan + (aff,), trace + [child]))
+                goals.append(key)
+        if goals:
+            seconds = time.perf_counter() - start_time
+            return _sampled(levels, goals, expanded, seconds, samples, seed)
+        if depth == max_steps:
+            break
+        nxt: dict[tuple, _Entry] = {}
+        for key, entry in levels[depth].items():
+            world.realise(entry.state)
+            actions = edges([(a, 1.0) for a in scan_order(scene.affordances())], merge_radius=0.01)
+            expanded += 1
+            for aff in actions:
+                child = world.apply(entry.state, aff)
+                if child is None or child.key() in seen:
+                    continue
+                e = nxt.setdefault(child.key(), _Entry(child))
+                e.parents.append((key, aff))
+                e.paths += entry.paths
+        if not nxt:
+            break
+        seen |= set(nxt)
+        levels.append(nxt)
     return SymbolicResult(None, expanded, time.perf_counter() - start_time)
+
+
+def _sampled(levels, goals, expanded, seconds, samples, seed) -> SymbolicResult:
+    """Up to `samples` distinct shortest plans, uniform over all of them, from the BFS levels
+    (the goal states `goals` are on the last)."""
+    depth = len(levels) - 1
+    total = sum(levels[depth][k].paths for k in goals)
+    rng = np.random.default_rng(seed)
+
+    def draw() -> tuple[tuple[Affordance, ...], list[SymbolicState]]:
+        weights = np.array([levels[depth][k].paths for k in goals], dtype=float)
+        key = goals[int(rng.choice(len(goals), p=weights / weights.sum()))]
+        plan: list[Affordance] = []
+        trace = [levels[depth][key].state]
+        for d in range(depth, 0, -1):
+            parents = levels[d][key].parents
+            w = np.array([levels[d - 1][k].paths for k, _ in parents], dtype=float)
+            key, aff = parents[int(rng.choice(len(parents), p=w / w.sum()))]
+            plan.append(aff)
+            trace.append(levels[d - 1][key].state)
+        return tuple(plan[::-1]), trace[::-1]
+
+    plans: list[tuple[Affordance, ...]] = []
+    traces = []
+    tries = 0
+    while len(plans) < min(samples, total) and tries < 20 * samples:
+        plan, trace = draw()
+        tries += 1
+        if plan not in plans:
+            plans.append(plan)
+            traces.append(trace)
+    return SymbolicResult(plans[0], expanded, seconds, traces[0][-1], traces[0], plans, total)

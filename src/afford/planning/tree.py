@@ -69,6 +69,9 @@ class SearchConfig:
     # Plans whose loss is within this of the best count as equally good: the shortest wins.
     tie_tolerance: float = 1e-4
     progress: bool = True
+    # Seconds after which the tree stops growing (checked between batches); the plan is then
+    # chosen among the states grown so far. None: no limit.
+    time_limit: float | None = None
 
 
 @dataclass
@@ -78,6 +81,7 @@ class SearchResult:
     seconds: float
     expanded: int  # nodes whose affordances were recognised
     per_depth: list[int] = field(default_factory=list)  # nodes at each depth
+    truncated: bool = False  # the time limit stopped the tree before max_steps
 
     @property
     def plan(self) -> tuple[Affordance, ...]:
@@ -125,6 +129,11 @@ def search(
     expanded = 0
     per_depth = [1]
     bs = config.batch_size
+    truncated = False
+
+    def out_of_time() -> bool:
+        return config.time_limit is not None and time.perf_counter() - start > config.time_limit
+
     for depth in range(max_steps):
         children: list[tuple[int, Affordance]] = []
         bar = tqdm(
@@ -134,6 +143,9 @@ def search(
             leave=False,
         )
         for b in range(0, len(frontier), bs):
+            if out_of_time():
+                truncated = True
+                break
             batch = frontier[b : b + bs]
             for i, rec in zip(batch, model.recognise([nodes[i] for i in batch]), strict=True):
                 children.extend((i, a) for a in edges(rec, config.merge_radius))
@@ -145,6 +157,9 @@ def search(
             total=len(children), desc=f"depth {depth + 1}/{max_steps}: predict", disable=not config.progress
         )
         for b in range(0, len(children), bs):
+            if out_of_time():
+                truncated = True
+                break
             batch = children[b : b + bs]
             made = model.predict([nodes[i] for i, _ in batch], [a for _, a in batch])
             new = [
@@ -161,11 +176,10 @@ def search(
             bar.update(len(batch))
         bar.close()
         per_depth.append(len(frontier))
-        if not frontier:
+        if not frontier or truncated:
             break
-    return SearchResult(
-        nodes, choose(nodes, goal, config.tie_tolerance), time.perf_counter() - start, expanded, per_depth
-    )
+    best = choose(nodes, goal, config.tie_tolerance)
+    return SearchResult(nodes, best, time.perf_counter() - start, expanded, per_depth, truncated)
 
 
 def choose(nodes: list[Node], goal: Goal, tie_tolerance: float) -> int:

@@ -127,3 +127,22 @@ def test_shipped_weights_plan_a_paper_task_that_needs_a_non_canonical_effect(sce
     o = solve(task, "learned", scene, SearchConfig(progress=False), load_learned())
     assert o.success, o.reason
     assert o.seconds < 20
+
+
+def test_diagnosis_names_recognition_when_the_working_plan_is_not_recognised(scene):
+    """Untrained nets recognise nothing confidently: the oracle's grasp-and-place is not in the
+    learned tree, so the failure is recognition's."""
+    from test_tasks import GOOD
+
+    from afford.planning.diagnose import diagnose
+    from afford.planning.tasks import task_from_json
+
+    torch.manual_seed(0)
+    recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.999)
+    task = task_from_json(GOOD, scene=scene)
+    d = diagnose(task, scene, (recognizer, PredictionNet(PRED["tiny"])))
+    assert d.oracle.success and not d.learned.success
+    assert d.cause == "recognition"
+    assert [s.action for s in d.steps] == ["grasp", "place"] and not d.steps[0].recognised
+    assert d.steps[-1].true_loss < 1e-3  # the oracle's plan truly reaches the goal image
+    assert "NOT recognised" in d.describe() and d.to_dict()["cause"] == "recognition"

@@ -85,7 +85,7 @@ def test_h_ball_placed_on_sloped_block_rolls_away(scene):
     scene.reset(
         [
             O.upright("support", 0.12, 0.30),
-            O("block", (0, 0.30, SUPPORT_TOP / 2 + 0.024), _yaw_quat(0, pitch)),
+            O("block", (0, 0.30, SUPPORT_TOP / 2 + 0.029), _yaw_quat(0, pitch)),  # as layouts prop it
             O.upright("ball", -0.1, 0.2),
         ]
     )

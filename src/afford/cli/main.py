@@ -20,8 +20,12 @@ def _scene_from_args(args):
     from afford.sim.scene import Scene, load_scene_file
 
     scene = Scene()
-    specs = load_scene_file(args.load) if args.load else random_layout(np.random.default_rng(args.seed))
-    scene.reset(specs)
+    if args.load:
+        scene.reset(load_scene_file(args.load), where=f"{Path(args.load).name}: ")
+    else:
+        scene.reset(
+            random_layout(np.random.default_rng(args.seed)), check=False
+        )  # overlap-free by construction
     return scene
 
 
@@ -412,6 +416,9 @@ def main(argv: list[str] | None = None) -> int:
     except (CLIError, SceneError, TaskError, DataError, CheckpointError) as e:
         print(f"afford: error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("afford: interrupted", file=sys.stderr)  # one line, not a traceback
+        return 130
 
 
 if __name__ == "__main__":

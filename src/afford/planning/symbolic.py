@@ -107,7 +107,7 @@ class CanonicalWorld:
     def realise(self, state: SymbolicState) -> None:
         """Put the scene in the state's canonical geometry (teleported, not simulated)."""
         specs = [ObjectSpec(self.kinds[n], p.pos, p.quat) for n, p in state.poses]
-        self.scene.reset(specs, settle=False)
+        self.scene.reset(specs, settle=False, check=False)
         if state.held is not None:
             # Close the hand on the held object where it was grasped, then bring the arm home:
             # the detector's probe then carries a copy of it as a real grasp would.

@@ -102,6 +102,11 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
     if isinstance(max_steps, bool) or not isinstance(max_steps, int) or not 1 <= max_steps <= MAX_STEPS_LIMIT:
         raise TaskError(f"{where}.max_steps: expected a whole number from 1 to {MAX_STEPS_LIMIT}")
     success = parse(obj["success"], set(object_names(specs)))
+    if scene is None:
+        from afford.sim.scene import Scene
+
+        scene = Scene()
+    scene.reset(specs, settle=False, where="scene.")  # validated: nothing off the table, sunk or overlapping
     goal, goal_scene, crop = _goal(obj["goal"], base, scene)
     return Task(
         name=str(obj.get("name", path.stem if path else "task")),
@@ -142,11 +147,7 @@ def _goal(g: object, base: Path, scene) -> tuple[Goal, list | None, tuple | None
             raise TaskError("goal.crop: a goal scene needs a crop box")
         goal_scene = specs_from_json(g["scene"], "goal.scene")
         crop = _crop(g["crop"])
-        if scene is None:
-            from afford.sim.scene import Scene
-
-            scene = Scene()
-        scene.reset(goal_scene)
+        scene.reset(goal_scene, where="goal.scene.")
         col, row, w, h = crop
         patch = scene.observe()[row : row + h, col : col + w]
     return Goal(np.ascontiguousarray(patch[..., : CHANNELS[channels]]), negative), goal_scene, crop

@@ -20,7 +20,6 @@ from afford.sim.constants import (
     BALL,
     BLOCK,
     CUP,
-    LIMITS,
     MOTION,
     PARK_Z,
     PHYSICS,
@@ -132,28 +131,27 @@ class Scene:
         self.reset([])
 
     # ------------------------------------------------------------------ set-up
-    def reset(self, objects: list[ObjectSpec], settle: bool = True) -> None:
-        """Empty gripper at the default pose, `objects` on the table, every other slot parked."""
-        counts = {k: 0 for k in ("cup", "ball", "support", "block")}
-        limits = {
-            "cup": LIMITS.cups,
-            "ball": LIMITS.balls,
-            "support": LIMITS.supports,
-            "block": LIMITS.blocks,
-        }
-        assigned: dict[str, ObjectSpec] = {}
-        for spec in objects:
-            if spec.kind not in counts:
-                raise SceneError(f"unknown object kind {spec.kind!r}; expected one of {sorted(counts)}")
-            if counts[spec.kind] >= limits[spec.kind]:
-                raise SceneError(f"too many {spec.kind}s: a scene holds at most {limits[spec.kind]}")
-            assigned[f"{spec.kind}{counts[spec.kind]}"] = spec
-            counts[spec.kind] += 1
+    def reset(
+        self, objects: list[ObjectSpec], settle: bool = True, check: bool = True, where: str = ""
+    ) -> None:
+        """Empty gripper at the default pose, `objects` on the table, every other slot parked.
+
+        With `check` the start is validated first (`afford.sim.validate`: finite numbers, on the
+        table and in view, nothing interpenetrating, sunk or floating), raising `SceneError`
+        (a ValueError) that names the object and field, after `where` (a file, say). Callers
+        that pose states of their own making (layouts built free of overlaps, canonical states
+        teleported into place) pass check=False."""
+        from afford.sim import validate
+
+        names = validate.check_numbers(objects, where)
+        if check:
+            validate.check_place(objects, names, where)
         mujoco.mj_resetData(self.model, self.data)
         self.model.eq_data[:] = self._eq_data0
         self.data.eq_active[:] = False
         self.held, self.held_drop = None, 0.0
         self.set_arm(self.home_q, fingers=1.0)
+        assigned = dict(zip(names, objects, strict=True))
         for index, (name, _) in enumerate(self.slots):
             if name in assigned:
                 spec = assigned[name]
@@ -162,6 +160,12 @@ class Scene:
             else:
                 self._park(name, index)
         mujoco.mj_forward(self.model, self.data)
+        if check:
+            try:
+                validate.check_contacts(self, names, where)
+            except SceneError:
+                self.reset([], settle=False, check=False)  # refused: leave an empty table, not the bad start
+                raise
         if settle:
             self.settle()
 

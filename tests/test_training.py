@@ -37,7 +37,30 @@ def test_train_resumes_and_evaluates(net, small_dataset, tmp_path, capsys):
     assert steps == sorted(steps) and steps[-1] == 20
     assert main(["eval", net, "--run", str(run), "--data", str(small_dataset), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert "test" in result and "train" in result
+    from afford.data.format import Dataset
+
+    test_states = sum(seq.length + 1 for seq in Dataset(small_dataset).sequences("test"))
+    if net == "recognition":  # Table 1: counts that add up, on every test state
+        table = result["test"]
+        assert table["images"] == test_states and table["spurious_per_image"] >= 0
+        for row in table["recall"].values():
+            assert 0 <= row["hits"] <= row["total"] and row["recall"] == pytest.approx(
+                row["hits"] / row["total"]
+            )
+        assert table["recall"]["all"]["total"] == sum(
+            table["recall"][t]["total"] for t in ("grasp", "place", "turn")
+        )
+    else:  # Table 2: each step's error over every test transition, the copy baseline beside it
+        transitions = sum(seq.length for seq in Dataset(small_dataset).sequences("test"))
+        for split in ("test", "test_copy"):
+            rows = result[split]
+            assert rows["all"]["all_area"]["n"] == transitions
+            assert sum(r["all_area"]["n"] for k, r in rows.items() if k != "all") == transitions
+            for row in rows.values():
+                assert all(0 <= row[m]["mean"] < 1 and row[m]["sd"] >= 0 for m in row)
+        copy = result["test_copy"]["all"]
+        # Copying errs only where the truth changed: the changed area's mean error is the larger.
+        assert 0 < copy["all_area"]["mean"] < copy["changed_area_any"]["mean"]
 
 
 def test_resume_with_another_architecture_is_one_line(small_dataset, tmp_path, capsys):
@@ -75,10 +98,12 @@ def test_sigterm_saves_a_checkpoint_and_resume_continues(small_dataset, tmp_path
     cmd = [sys.executable, "-m", "afford.cli.main", "train", "recognition", "--data", str(small_dataset)]
     cmd += ["--preset", "tiny", "--out", str(run), "--threads", "1", "--steps", "100000"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    log = run / "log.jsonl"
     deadline = time.time() + 120
-    while not (run / "log.jsonl").exists() and time.time() < deadline:
-        time.sleep(0.1)
-    time.sleep(1.0)
+    # Wait for the first logged training step (an event, not a guess of how long it takes).
+    while not (log.exists() and '"train/loss"' in log.read_text()) and time.time() < deadline:
+        time.sleep(0.05)
+    assert log.exists(), "training logged no step in time"
     proc.send_signal(signal.SIGTERM)
     out, _ = proc.communicate(timeout=60)
     assert proc.returncode == 130 and b"run the same command again" in out

@@ -24,7 +24,7 @@ lifting an object does not count as removing it (IV.C): "channels": "rgb" does t
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -54,7 +54,6 @@ class Task:
     path: Path | None = None
     goal_scene: list | None = None  # the goal scene, when the goal was rendered from one
     crop: tuple[int, int, int, int] | None = None  # its pixel box (col, row, width, height)
-    extra: dict = field(default_factory=dict)
 
     def object_names(self) -> list[str]:
         return object_names(self.scene)

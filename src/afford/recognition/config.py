@@ -57,11 +57,6 @@ class RecognitionConfig:
     def grid(self) -> int:
         return self.image_size // self.stride
 
-    @property
-    def outputs_per_anchor(self) -> int:
-        # confidence, type logits, x and y offsets, angle offset, z, symmetry
-        return 1 + len(self.types) + 2 + 1 + 1 + 1
-
 
 PRESETS = {
     # 5,000 batches in 46.5 min on 2 CPU cores (see README). Turns weigh 3 (4% of the affordances), the

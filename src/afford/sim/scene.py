@@ -9,7 +9,7 @@ this one owns the state.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
@@ -92,7 +92,6 @@ class Snapshot:
     eq_data: np.ndarray
     held: str | None
     held_drop: float
-    extra: dict = field(default_factory=dict)
 
 
 class Scene:

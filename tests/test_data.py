@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -234,3 +235,32 @@ def test_torch_datasets(small):
     images, actions, steps = collate_prediction(batch)
     assert images.shape[1] == int(steps.max()) + 1 and actions.shape[:2] == (len(batch), int(steps.max()))
     assert int(steps.min()) >= 1 and int(steps.max()) <= 4
+
+
+def test_generate_heals_corrupt_shards_and_info_names_them(small, tmp_path, capsys):
+    from afford.data.format import read_manifest
+
+    root = tmp_path / "copy"
+    shutil.copytree(small, root)
+    truncated, flipped = shard_path(root, 0), shard_path(root, 2)
+    truncated.write_bytes(truncated.read_bytes()[:1000])
+    data = bytearray(flipped.read_bytes())
+    data[len(data) // 2] ^= 0xFF  # one byte inside the images: only the checksum can tell
+    flipped.write_bytes(bytes(data))
+    original = [seq.index for seq in Dataset(small).sequences()]
+
+    assert main(["data", "info", str(root), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert len(info["shards"]["corrupt"]) == 1 and "shard-000000" in info["shards"]["corrupt"][0]
+    assert info["sequences_present"] == len(original) - SHARD  # the good shards still counted
+
+    m = read_manifest(root)
+    assert main(["generate", "--out", str(root), "--sequences", str(m.sequences), "--seed", str(m.seed),
+                 "--workers", "1", "--shard-size", str(m.shard_size), "--json"]) == 0  # fmt: skip
+    report = json.loads(capsys.readouterr().out)
+    remade = " ".join(report["shards_remade"])
+    assert report["shards_made"] == 2 and "shard-000000" in remade and "shard-000002" in remade
+    problems, good = verify(root)
+    assert problems == [] and good == m.n_shards
+    a, b = Dataset(small), Dataset(root)
+    assert all(_same(a, b, i) for i in range(len(original)))  # made again, identical

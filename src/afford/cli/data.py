@@ -30,6 +30,7 @@ def cmd_generate(args) -> int:
         "sequences": report.sequences,
         "shards_made": report.made_shards,
         "shards_already_there": report.skipped_shards,
+        "shards_remade": report.remade,
         "executions_made": report.executions,
         "failed_executions_redrawn": report.failed_executions,
         "seconds": round(report.seconds, 2),
@@ -38,6 +39,8 @@ def cmd_generate(args) -> int:
     if args.json:
         print(json.dumps(record, indent=2))
     else:
+        for problem in report.remade:
+            print(f"made again: {problem}")
         print(
             f"{args.out}: {report.sequences} sequences ({report.made_shards} shards made, "
             f"{report.skipped_shards} already there); {report.executions} executions in "
@@ -49,7 +52,7 @@ def cmd_generate(args) -> int:
 def dataset_info(root: Path) -> dict:
     from tqdm import tqdm
 
-    from afford.data.format import read_manifest, shard_path, shard_status, shard_summary
+    from afford.data.format import DataError, read_manifest, shard_path, shard_status, shard_summary
 
     m = read_manifest(root)
     present, missing = shard_status(root, m)
@@ -57,8 +60,13 @@ def dataset_info(root: Path) -> dict:
     executed: Counter[str] = Counter()
     listed: Counter[str] = Counter()
     per_state: list[int] = []
+    bad: list[str] = []
     for k in tqdm(present, desc="info", unit="shard", leave=False, disable=len(present) < 20):
-        s = shard_summary(shard_path(root, k))
+        try:
+            s = shard_summary(shard_path(root, k))
+        except DataError as e:  # the rest of the dataset is still worth describing
+            bad.append(str(e))
+            continue
         lengths.update((s["state_count"] - 1).tolist())
         executed.update(TYPES[int(t)] for t in s["actions"][:, 0])
         listed.update(TYPES[int(t)] for t in s["affordances"][:, 0])
@@ -70,7 +78,7 @@ def dataset_info(root: Path) -> dict:
         "format_version": m.version,
         "sequences_planned": m.sequences,
         "sequences_present": int(sum(lengths.values())),
-        "shards": {"present": len(present), "missing": len(missing)},
+        "shards": {"present": len(present) - len(bad), "missing": len(missing), "corrupt": bad},
         "seed": m.seed,
         "splits": {name: stop - start for name, (start, stop) in m.splits.items()},
         "executions": int(sum(executed.values())),
@@ -94,8 +102,11 @@ def cmd_data_info(args) -> int:
     print(f"{info['path']}  (format version {info['format_version']}, seed {info['seed']})")
     print(
         f"  sequences   {info['sequences_present']} of {info['sequences_planned']}"
-        f"  (shards: {info['shards']['present']} present, {info['shards']['missing']} missing)"
+        f"  (shards: {info['shards']['present']} good, {info['shards']['missing']} missing, "
+        f"{len(info['shards']['corrupt'])} corrupt)"
     )
+    for problem in info["shards"]["corrupt"]:
+        print(f"  {problem}: re-run the same `afford generate` to make it again")
     print("  splits      " + ", ".join(f"{k} {v}" for k, v in info["splits"].items()))
     per = ", ".join(f"{t} {n}" for t, n in info["executions_per_type"].items())
     print(f"  executions  {info['executions']}  ({per})")

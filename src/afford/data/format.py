@@ -314,6 +314,26 @@ def shard_summary(path: Path) -> dict[str, np.ndarray]:
         raise DataError(f"{path}: corrupt shard ({type(e).__name__}: {e})") from None
 
 
+def check_shard(root: Path, manifest: Manifest, k: int) -> str | None:
+    """One line naming what is wrong with shard `k`, or None when it is whole: every zip member's
+    CRC (the arrays are inflated, not decoded) and the sequence indices it holds."""
+    path = shard_path(root, k)
+    try:
+        with zipfile.ZipFile(path) as z:
+            bad = z.testzip()
+            if bad is not None:
+                return f"{path}: corrupt shard (checksum of {bad} fails)"
+        with np.load(path, allow_pickle=False) as a:
+            index = a["index"]
+    except FileNotFoundError:
+        return f"{path}: shard missing"
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
+        return f"{path}: corrupt shard ({type(e).__name__}: {e})"
+    if index.tolist() != list(manifest.shard_range(k)):
+        return f"{path}: corrupt shard (holds the wrong sequences)"
+    return None
+
+
 def verify(root: str | Path, progress: bool = False) -> tuple[list[str], int]:
     """Read every shard in full (zip CRCs, array consistency, sequence indices).
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +19,7 @@ from afford.data.format import (
     DataError,
     Manifest,
     Sequence,
+    check_shard,
     default_splits,
     encode_affordance,
     quantise,
@@ -51,6 +52,7 @@ class GenerateReport:
     executions: int  # made by this run
     failed_executions: int  # drawn but not executable by the arm (re-drawn)
     seconds: float
+    remade: list[str] = field(default_factory=list)  # shards that failed their check, made again
 
     @property
     def executions_per_second(self) -> float:
@@ -168,10 +170,21 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
 
     root = Path(root)
     manifest = prepare(root, config)
+    report = GenerateReport(config.sequences, 0, 0, 0, 0, 0.0)
     # Left-overs of a killed run: a shard that was being written is made again.
     for stale in (root / SHARD_DIR).glob(".*.tmp") if (root / SHARD_DIR).is_dir() else []:
         stale.unlink(missing_ok=True)
     present, missing = shard_status(root, manifest)
+    # Heal: a shard whose checksum fails (a disk error, a copy cut short) is made again.
+    for k in tqdm(list(present), desc="check shards", unit="shard", disable=not progress, leave=False):
+        problem = check_shard(root, manifest, k)
+        if problem is not None:
+            report.remade.append(problem)
+            shard_path(root, k).unlink(missing_ok=True)
+            present.remove(k)
+            missing.append(k)
+    missing.sort()
+    report.skipped_shards = len(present)
     done = sum(len(manifest.shard_range(k)) for k in present)
     jobs = [
         (
@@ -184,7 +197,6 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
         )
         for k in missing
     ]
-    report = GenerateReport(config.sequences, 0, len(present), 0, 0, 0.0)
     bar = tqdm(
         total=config.sequences,
         initial=done,

@@ -141,3 +141,11 @@ def test_bench_random_cli_gives_intervals(tmp_path):
     assert json.loads(out.read_text())["n"] == 2
     bad = afford("bench", "random", "--time-limit", "0")
     assert bad.returncode == 2 and "--time-limit" in bad.stderr
+
+
+def test_plan_cli_refuses_a_huge_tree_in_one_line(tmp_path):
+    deep = tmp_path / "deep.json"
+    deep.write_text(json.dumps({**json.loads((PAPER / "01-order.json").read_text()), "max_steps": 8}))
+    r = afford("plan", "--task", str(deep), "--max-nodes", "30", "--out", str(tmp_path), "--json")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1
+    assert "would add" in r.stderr and "--max-nodes" in r.stderr

@@ -1,6 +1,7 @@
 """The tree search of paper II.D on a toy world model: a marker on a line of cells."""
 
 import numpy as np
+import pytest
 
 from afford.planning.goal import Goal
 from afford.planning.tree import SearchConfig, edges, search
@@ -114,3 +115,15 @@ def test_time_limit_stops_the_tree_and_still_plans():
     cut = search(SlowWorld(), goal, 3, SearchConfig(progress=False, batch_size=1, time_limit=0.05))
     assert cut.truncated and len(cut.nodes) < len(free.nodes)
     assert cut.best < len(cut.nodes)  # a plan from the states grown so far
+
+
+def test_a_tree_past_its_node_limit_is_refused_before_it_is_grown():
+    from afford.planning.tree import TreeTooLarge
+
+    world = LineWorld()
+    full = search(world, Goal(picture(4)), 3, SearchConfig(progress=False))
+    limit = full.per_depth[0] + full.per_depth[1] + 1  # room for depth 1, not for depth 2
+    world = LineWorld()
+    with pytest.raises(TreeTooLarge, match=r"depth 2 would add .* states .*limit"):
+        search(world, Goal(picture(4)), 3, SearchConfig(progress=False, max_nodes=limit))
+    assert world.recognised <= 1 + full.per_depth[1]  # depth 2 was never predicted

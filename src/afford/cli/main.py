@@ -120,7 +120,8 @@ def cmd_plan(args) -> int:
     scene = Scene()
     task = load_task(args.task, scene)
     learned = _learned(args) if args.planner == "learned" else None
-    outcome = solve(task, args.planner, scene, SearchConfig(progress=not args.json), learned)
+    config = SearchConfig(progress=not args.json, max_nodes=args.max_nodes or None)
+    outcome = solve(task, args.planner, scene, config, learned)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     picture = out / f"{task.name}-{args.planner}.png"
@@ -162,7 +163,9 @@ def cmd_bench_tasks(args) -> int:
             live = not args.json and sys.stdout.isatty()
             if live:
                 print(f"{task.name} ...", end="", flush=True)
-            o = solve(task, planner, scene, SearchConfig(progress=False), learned)
+            o = solve(
+                task, planner, scene, SearchConfig(progress=False, max_nodes=args.max_nodes or None), learned
+            )
             if args.out:
                 plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
             rows.append(o.to_dict())
@@ -270,6 +273,12 @@ def _learned(args):
         raise CLIError(str(e)) from None
 
 
+MAX_NODES_HELP = (
+    "refuse to grow a tree past this many states, with the estimate, before growing the depth that "
+    "would pass it (default 20,000; 0: no limit; the paper's tasks need at most ~700)"
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="afford",
@@ -304,6 +313,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     from afford.planning.run import PLANNERS
+    from afford.planning.tree import SearchConfig
 
     pl = sub.add_parser(
         "plan",
@@ -319,6 +329,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--planner", choices=PLANNERS, default="oracle")
     pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
     pl.add_argument("--json", action="store_true", help="print the record as JSON")
+    pl.add_argument("--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP)
     pl.add_argument(
         "--weights",
         "--run-dir",
@@ -343,6 +354,7 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")
+    bt.add_argument("--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP)
     bt.set_defaults(func=cmd_bench_tasks)
 
     br = bsub.add_parser(
@@ -405,6 +417,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from afford.data.format import DataError
     from afford.planning.tasks import TaskError
+    from afford.planning.tree import TreeTooLarge
     from afford.sim.scene import SceneError
     from afford.training.checkpoint import CheckpointError
     from afford.training.memory import keep_freed_memory
@@ -413,7 +426,7 @@ def main(argv: list[str] | None = None) -> int:
     keep_freed_memory()  # the nets' large tensors recur every step: keep their memory
     try:
         return args.func(args)
-    except (CLIError, SceneError, TaskError, DataError, CheckpointError) as e:
+    except (CLIError, SceneError, TaskError, DataError, CheckpointError, TreeTooLarge) as e:
         print(f"afford: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -72,6 +72,13 @@ class SearchConfig:
     # Seconds after which the tree stops growing (checked between batches); the plan is then
     # chosen among the states grown so far. None: no limit.
     time_limit: float | None = None
+    # The most states a tree may hold: a depth expected to pass it is refused before it is
+    # grown (TreeTooLarge says by how much). The paper's tasks need at most ~700. None: no limit.
+    max_nodes: int | None = 20_000
+
+
+class TreeTooLarge(ValueError):
+    """A depth of the tree would pass `SearchConfig.max_nodes`; the message gives the estimate."""
 
 
 @dataclass
@@ -135,6 +142,10 @@ def search(
         return config.time_limit is not None and time.perf_counter() - start > config.time_limit
 
     for depth in range(max_steps):
+        if config.max_nodes is not None and depth > 0:
+            # Before recognising: the last level's branching factor, carried one level on.
+            branching = per_depth[-1] / max(per_depth[-2], 1)
+            _refuse(depth, len(nodes), len(frontier) * branching, config.max_nodes, "about ")
         children: list[tuple[int, Affordance]] = []
         bar = tqdm(
             total=len(frontier),
@@ -152,6 +163,8 @@ def search(
             expanded += len(batch)
             bar.update(len(batch))
         bar.close()
+        if config.max_nodes is not None:
+            _refuse(depth, len(nodes), len(children), config.max_nodes, "")  # now exact
         frontier = []
         bar = tqdm(
             total=len(children), desc=f"depth {depth + 1}/{max_steps}: predict", disable=not config.progress
@@ -180,6 +193,14 @@ def search(
             break
     best = choose(nodes, goal, config.tie_tolerance)
     return SearchResult(nodes, best, time.perf_counter() - start, expanded, per_depth, truncated)
+
+
+def _refuse(depth: int, have: int, adds: float, limit: int, about: str) -> None:
+    if have + adds > limit:
+        raise TreeTooLarge(
+            f"depth {depth + 1} would add {about}{adds:,.0f} states to the {have:,} grown (limit {limit:,}): "
+            "plan fewer steps, or raise the limit (--max-nodes)"
+        )
 
 
 def choose(nodes: list[Node], goal: Goal, tie_tolerance: float) -> int:

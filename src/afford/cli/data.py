@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from afford.cli.errors import CLIError
 from afford.sim.affordances import TYPES
 
 
@@ -120,7 +121,6 @@ def cmd_data_info(args) -> int:
 
 
 def cmd_data_show(args) -> int:
-    from afford.cli.main import CLIError
     from afford.data.format import Dataset
     from afford.viz.draw import draw_affordances, hstack, label, to_pil
 
@@ -168,8 +168,6 @@ def cmd_data_predict(args) -> int:
     from afford.prediction.evaluate import load_net
 
     if args.sequences is not None and args.sequences < 1:
-        from afford.cli.main import CLIError
-
         raise CLIError("--sequences must be at least 1")
     data = Dataset(args.dir)
     checkpoint = Path(args.prediction) if args.prediction else WEIGHTS / PREDICTION_FILE

@@ -10,9 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-class CLIError(Exception):
-    """A user mistake: printed as one line, exit status 2."""
+from afford.cli.errors import CLIError
 
 
 def _scene_from_args(args):

@@ -5,10 +5,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from afford.cli.errors import CLIError
+
 
 def cmd_train(args) -> int:
     """Train the net named by `args.net` with its preset and overrides."""
-    from afford.cli.main import CLIError
     from afford.training.overrides import OverrideError, apply_overrides
 
     if args.net == "recognition":
@@ -99,7 +100,6 @@ def _report(args, result: dict, folder: Path, record: str, pictures: str, text: 
 
 
 def _load_weights(weights: str | None):
-    from afford.cli.main import CLIError
     from afford.planning.learned import load_learned
 
     try:
@@ -130,7 +130,6 @@ def cmd_futures(args) -> int:
 
 
 def _check_run(run: str) -> None:
-    from afford.cli.main import CLIError
 
     if not Path(run).is_dir():
         raise CLIError(f"{run}: no such run folder (make one with `afford train ...`)")

@@ -18,7 +18,6 @@ from afford.planning.tree import SearchConfig, search
 from afford.sim.affordances import Affordance
 from afford.sim.scene import Scene
 
-PLANNERS = ("oracle", "symbolic", "learned")
 DEVIATION = 0.03  # metres from its canonical place at which an object's fate counts as non-canonical
 
 
@@ -71,19 +70,25 @@ def solve(
     task: Task, planner: str, scene: Scene, config: SearchConfig | None = None, learned=None
 ) -> Outcome:
     """Plan `task` with `planner`; `learned` is the (Recognizer, PredictionNet) pair for "learned"."""
-    config = config or SearchConfig()
-    if planner == "oracle":
-        return _solve_search(task, "oracle", OracleModel(scene, task.scene), scene, config)
-    if planner == "learned":
-        if learned is None:
-            from afford.planning.learned import load_learned
+    if planner not in PLANNER_REGISTRY:
+        raise ValueError(f"unknown planner {planner!r}; expected one of {PLANNERS}")
+    return PLANNER_REGISTRY[planner](task, scene, config or SearchConfig(), learned)
 
-            learned = load_learned()
-        model = LearnedModel(scene, task.scene, *learned)
-        return _solve_search(task, "learned", model, scene, config)
-    if planner == "symbolic":
-        return _solve_symbolic(task, scene)
-    raise ValueError(f"unknown planner {planner!r}; expected one of {PLANNERS}")
+
+def _oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    return _solve_search(task, "oracle", OracleModel(scene, task.scene), scene, config)
+
+
+def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    if learned is None:
+        from afford.planning.learned import load_learned
+
+        learned = load_learned()
+    return _solve_search(task, "learned", LearnedModel(scene, task.scene, *learned), scene, config)
+
+
+def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    return _solve_symbolic(task, scene)
 
 
 def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConfig) -> Outcome:
@@ -175,3 +180,8 @@ def _deviation(scene: Scene, predicted, names: list[str]) -> str:
             notes.append(f"{name} ended {off * 100:.0f} cm from its canonical place{tipped}")
     detail = "; ".join(notes) if notes else "objects are where canonical effects put them"
     return f"non-canonical effects: {detail}"
+
+
+# Each planner: (task, scene, search config, learned nets or None) -> Outcome.
+PLANNER_REGISTRY = {"oracle": _oracle, "symbolic": _symbolic, "learned": _learned}
+PLANNERS = tuple(PLANNER_REGISTRY)

@@ -1,0 +1,5 @@
+"""The CLI's own error, apart from the commands so that every command module can raise it."""
+
+
+class CLIError(Exception):
+    """A user mistake: printed as one line, exit status 2."""

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from afford.cli.errors import CLIError
+from afford.data.format import Col
 from afford.sim.affordances import TYPES
 
 
@@ -69,8 +70,8 @@ def dataset_info(root: Path) -> dict:
             bad.append(str(e))
             continue
         lengths.update((s["state_count"] - 1).tolist())
-        executed.update(TYPES[int(t)] for t in s["actions"][:, 0])
-        listed.update(TYPES[int(t)] for t in s["affordances"][:, 0])
+        executed.update(TYPES[int(t)] for t in s["actions"][:, Col.TYPE])
+        listed.update(TYPES[int(t)] for t in s["affordances"][:, Col.TYPE])
         per_state.extend(s["aff_count"].tolist())
     disk = sum(f.stat().st_size for f in root.rglob("*") if f.is_file())
     counts = np.array(per_state) if per_state else np.zeros(1)

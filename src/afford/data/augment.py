@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from afford.data.format import Col as C
 from afford.sim import camera
 from afford.sim.constants import CAMERA
 
@@ -36,16 +37,16 @@ def _move_rows(rows: np.ndarray, dcol: int, drow: int, mirror: bool) -> np.ndarr
     if len(rows) == 0:
         return rows
     out = rows.copy()
-    px = camera.world_to_pixel(rows[:, 1:4])
+    px = camera.world_to_pixel(rows[:, C.POSITION])
     if mirror:
         px[:, 0] = camera.SIZE - px[:, 0]
         # Mirroring swaps handedness: an angle a becomes 180 - a, a counter-clockwise turn clockwise.
-        out[:, 4] = (180.0 - rows[:, 4]) % 360.0
-        out[:, 6] = -rows[:, 6]
+        out[:, C.ANGLE] = (180.0 - rows[:, C.ANGLE]) % 360.0
+        out[:, C.TURN] = -rows[:, C.TURN]
     px[:, 0] += dcol
     px[:, 1] += drow
-    out[:, 1:4] = camera.pixel_to_world(px, _z_to_unit_depth(rows[:, 3]))
-    out[:, 3] = rows[:, 3]
+    out[:, C.POSITION] = camera.pixel_to_world(px, _z_to_unit_depth(rows[:, C.Z]))
+    out[:, C.Z] = rows[:, C.Z]
     return out
 
 
@@ -84,15 +85,15 @@ def augment(
         rows = _move_rows(np.asarray(rows, dtype=np.float32), dcol, drow, mirror)
         if config.angle_flip and len(rows):
             # Symmetric affordances and turns do not depend on the gripper's direction.
-            free = (rows[:, 5] > 0.5) | (rows[:, 6] != 0)
+            free = (rows[:, C.SYMMETRIC] > 0.5) | (rows[:, C.TURN] != 0)
             flip = free & (rng.random(len(rows)) < 0.5)
-            rows[flip, 4] = (rows[flip, 4] + 180.0) % 360.0
+            rows[flip, C.ANGLE] = (rows[flip, C.ANGLE] + 180.0) % 360.0
         if noisy is not None and noisy[k] and len(rows):
-            rows[:, 1:3] += (
+            rows[:, C.XY] += (
                 rng.normal(0, config.position_noise, size=(len(rows), 2)) if config.position_noise else 0
             )
-            rows[:, 4] = (
-                rows[:, 4] + (rng.normal(0, config.angle_noise, len(rows)) if config.angle_noise else 0)
+            rows[:, C.ANGLE] = (
+                rows[:, C.ANGLE] + (rng.normal(0, config.angle_noise, len(rows)) if config.angle_noise else 0)
             ) % 360
         out.append(rows.astype(np.float32))
     return images, out

@@ -38,6 +38,17 @@ PAPER_SEQUENCES = 26_563
 PAPER_HELD_OUT = 500
 # An affordance row: type index, x, y, z, angle (degrees), symmetric (0/1), turn (+-90 or 0).
 AFF_COLUMNS = ("type", "x", "y", "z", "angle", "symmetric", "turn")
+AFF_WIDTH = len(AFF_COLUMNS)
+
+
+class Col:
+    """Where each of AFF_COLUMNS sits in a row: code reads rows by these names, not numbers."""
+
+    TYPE, X, Y, Z, ANGLE, SYMMETRIC, TURN = range(AFF_WIDTH)
+    POSITION = slice(X, Z + 1)  # x, y, z
+    XY = slice(X, Y + 1)
+
+
 POSE_COLUMNS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 SPLITS = ("train", "val", "test")
 
@@ -47,16 +58,19 @@ class DataError(ValueError):
 
 
 def encode_affordance(a: Affordance) -> np.ndarray:
-    return np.array([TYPES.index(a.type), *a.position, a.angle, float(a.symmetric), a.turn], dtype=np.float32)
+    row = np.zeros(AFF_WIDTH, dtype=np.float32)
+    row[Col.TYPE], row[Col.POSITION], row[Col.ANGLE] = TYPES.index(a.type), a.position, a.angle
+    row[Col.SYMMETRIC], row[Col.TURN] = float(a.symmetric), a.turn
+    return row
 
 
 def decode_affordance(row: np.ndarray) -> Affordance:
     return Affordance(
-        TYPES[int(row[0])],
-        tuple(float(v) for v in row[1:4]),
-        float(row[4]),
-        bool(row[5] > 0.5),
-        int(round(float(row[6]))),
+        TYPES[int(row[Col.TYPE])],
+        tuple(float(v) for v in row[Col.POSITION]),
+        float(row[Col.ANGLE]),
+        bool(row[Col.SYMMETRIC] > 0.5),
+        int(round(float(row[Col.TURN]))),
     )
 
 
@@ -191,8 +205,8 @@ def write_shard(path: Path, sequences: list[Sequence]) -> None:
         "held": np.concatenate([s.held for s in sequences]).astype(np.int8),
         "poses": np.concatenate([s.poses for s in sequences]).astype(np.float32),
         "aff_count": aff_counts,
-        "affordances": np.concatenate([a for s in sequences for a in s.affordances]).reshape(-1, 7),
-        "actions": np.concatenate([s.actions for s in sequences]).reshape(-1, 7).astype(np.float32),
+        "affordances": np.concatenate([a for s in sequences for a in s.affordances]).reshape(-1, AFF_WIDTH),
+        "actions": np.concatenate([s.actions for s in sequences]).reshape(-1, AFF_WIDTH).astype(np.float32),
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")

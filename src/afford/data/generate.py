@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from afford.data.format import (
+    AFF_WIDTH,
     SHARD_DIR,
     DataError,
     Manifest,
@@ -78,7 +79,7 @@ def make_sequence(scene: Scene, seed: int, index: int, max_steps: int) -> tuple[
         affs = scene.affordances()
         rgbs.append(rgb)
         depths.append(depth)
-        lists.append(np.array([encode_affordance(a) for a in affs], dtype=np.float32).reshape(-1, 7))
+        lists.append(np.array([encode_affordance(a) for a in affs], dtype=np.float32).reshape(-1, AFF_WIDTH))
         held.append(slots.index(scene.held) if scene.held else -1)
         poses.append(_pose_array(scene))
         if step == max_steps:
@@ -103,7 +104,7 @@ def make_sequence(scene: Scene, seed: int, index: int, max_steps: int) -> tuple[
         rgb=np.stack(rgbs),
         depth=np.stack(depths),
         affordances=lists,
-        actions=np.array(actions, dtype=np.float32).reshape(-1, 7),
+        actions=np.array(actions, dtype=np.float32).reshape(-1, AFF_WIDTH),
         held=np.array(held, dtype=np.int8),
         poses=np.stack(poses),
         slots=slots,

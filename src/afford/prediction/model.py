@@ -18,6 +18,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from afford.data.format import Col
 from afford.prediction.config import PredictionConfig
 from afford.prediction.dense import DenseDecoder, DenseEncoder, DenseP
 from afford.prediction.layers import apply_difference, clamped_tanh, normalise_latent
@@ -66,13 +67,13 @@ class PredictionNet(nn.Module):
 
     def action_vector(self, rows: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
         """Affordance rows (B, 7: type, x, y, z, angle, symmetric, turn) -> the P input (B, 9)."""
-        pos = rows[:, 1:4]
+        pos = rows[:, Col.POSITION]
         pixel = affordance_pixel(image, pos) if self.config.pixel_input else image.new_zeros(len(rows), 4)
         return torch.cat(
             [
                 (pos - self.pos_centre) / self.pos_scale,
-                (rows[:, 4:5] % 360.0) / 360.0,
-                rows[:, 6:7] / 90.0,
+                (rows[:, Col.ANGLE, None] % 360.0) / 360.0,
+                rows[:, Col.TURN, None] / 90.0,
                 pixel,
             ],
             -1,
@@ -82,8 +83,8 @@ class PredictionNet(nn.Module):
         """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
         new values and, last, its mask."""
         vector = self.action_vector(rows, image)
-        pixel = world_to_pixel(rows[:, 1:4])
-        types = rows[:, 0].long()
+        pixel = world_to_pixel(rows[:, Col.POSITION])
+        types = rows[:, Col.TYPE].long()
         dc = memory_out = None
         for t, module in enumerate(self.modules_by_type):
             idx = torch.nonzero(types == t).flatten()

@@ -19,6 +19,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from afford.data.format import AFF_WIDTH, Col
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import REG
 from afford.sim import camera
@@ -57,11 +58,11 @@ def build_targets(rows_list: list[np.ndarray | torch.Tensor], config: Recognitio
     reg = torch.zeros((b, a, g, g, t, REG))
     mask = torch.zeros((b, a, g, g, t), dtype=torch.bool)
     for i, rows in enumerate(rows_list):
-        rows = np.asarray(rows, dtype=np.float64).reshape(-1, 7)
+        rows = np.asarray(rows, dtype=np.float64).reshape(-1, AFF_WIDTH)
         if len(rows) == 0:
             continue
-        grid_xy = camera.world_to_pixel(rows[:, 1:4]) / config.stride
-        k, off = anchor_of(rows[:, 4], config)
+        grid_xy = camera.world_to_pixel(rows[:, Col.POSITION]) / config.stride
+        k, off = anchor_of(rows[:, Col.ANGLE], config)
         for r in range(len(rows)):
             gx, gy = grid_xy[r]
             cx, cy = int(np.floor(gx)), int(np.floor(gy))
@@ -69,14 +70,20 @@ def build_targets(rows_list: list[np.ndarray | torch.Tensor], config: Recognitio
             if config.neighbours:
                 cells.append((cx - 1 if gx - cx < 0.5 else cx + 1, cy))
                 cells.append((cx, cy - 1 if gy - cy < 0.5 else cy + 1))
-            typ = int(rows[r, 0])
+            typ = int(rows[r, Col.TYPE])
             for x, y in cells:
                 if not (0 <= x < g and 0 <= y < g):
                     continue
                 obj[i, k[r], y, x] = 1.0
                 types[i, k[r], y, x, typ] = 1.0
                 reg[i, k[r], y, x, typ] = torch.tensor(
-                    [gx - x, gy - y, off[r] / ANCHOR_HALF_WIDTH, rows[r, 3] * config.z_scale, rows[r, 5]]
+                    [
+                        gx - x,
+                        gy - y,
+                        off[r] / ANCHOR_HALF_WIDTH,
+                        rows[r, Col.Z] * config.z_scale,
+                        rows[r, Col.SYMMETRIC],
+                    ]
                 )
                 mask[i, k[r], y, x, typ] = True
     return Targets(obj, types, reg, mask)

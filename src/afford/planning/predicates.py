@@ -25,10 +25,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from afford.sim.constants import BLOCK, SUPPORT
+from afford.sim.constants import BLOCK, SUPPORT, TOLERANCES
 
 HIDDEN_PIXELS = 3  # a few stray pixels at an edge do not make an object visible
-UPRIGHT_COS = 0.9
+UPRIGHT_COS = TOLERANCES.upright_cos
 ON_GAP = (-0.012, 0.02)  # metres between the object's lowest point and the host's top
 ON_MARGIN = 0.01  # the object's centre may overhang the host's top face by this much
 HOST_HALF = {"support": SUPPORT.half, "block": BLOCK.half}

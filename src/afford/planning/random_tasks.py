@@ -15,10 +15,11 @@ import numpy as np
 from afford.planning.goal import Goal
 from afford.planning.tasks import Task, object_names
 from afford.sim.affordances import parametrise
+from afford.sim.constants import TOLERANCES
 from afford.sim.layout import random_layout
 from afford.sim.scene import Scene
 
-TOLERANCE = 0.03  # metres
+TOLERANCE = TOLERANCES.position  # metres
 CHANGED = 0.05  # a pixel changed when a channel moved by more than this
 MARGIN = 4  # pixels around the changed region
 MIN_SIZE = 16  # the smallest goal crop, pixels

@@ -16,9 +16,10 @@ from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchConfig, search
 from afford.sim.affordances import Affordance
+from afford.sim.constants import TOLERANCES
 from afford.sim.scene import Scene
 
-DEVIATION = 0.03  # metres from its canonical place at which an object's fate counts as non-canonical
+DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
 
 
 @dataclass
@@ -176,7 +177,7 @@ def _deviation(scene: Scene, predicted, names: list[str]) -> str:
             continue
         off = float(np.linalg.norm(real.pos - want))
         if off > DEVIATION and name != predicted.held:
-            tipped = " and toppled" if real.kind == "cup" and real.up_axis[2] < 0.9 else ""
+            tipped = " and toppled" if real.kind == "cup" and real.up_axis[2] < TOLERANCES.upright_cos else ""
             notes.append(f"{name} ended {off * 100:.0f} cm from its canonical place{tipped}")
     detail = "; ".join(notes) if notes else "objects are where canonical effects put them"
     return f"non-canonical effects: {detail}"

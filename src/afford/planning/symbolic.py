@@ -27,7 +27,7 @@ from afford.planning.predicates import Predicate, rests_on
 from afford.planning.tree import edges
 from afford.sim.affordances import Affordance
 from afford.sim.camera import world_to_pixel
-from afford.sim.constants import MOTION
+from afford.sim.constants import MOTION, TOLERANCES
 from afford.sim.scene import ObjectSpec, Scene
 
 SYMBOLIC_SAMPLES = 8  # shortest canonical plans executed to judge the baseline
@@ -239,7 +239,7 @@ def plan_symbolic(
         nxt: dict[tuple, _Entry] = {}
         for key, entry in levels[depth].items():
             world.realise(entry.state)
-            actions = edges([(a, 1.0) for a in scan_order(scene.affordances())], merge_radius=0.01)
+            actions = edges([(a, 1.0) for a in scan_order(scene.affordances())], TOLERANCES.merge_radius)
             expanded += 1
             for aff in actions:
                 child = world.apply(entry.state, aff)

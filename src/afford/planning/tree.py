@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from afford.planning.goal import Goal
 from afford.sim.affordances import Affordance, parametrise
+from afford.sim.constants import TOLERANCES
 
 
 @dataclass
@@ -65,7 +66,7 @@ class SearchConfig:
     """How the tree is grown and the plan chosen."""
 
     batch_size: int = 256  # states recognised / predicted per batch (the authors used 256)
-    merge_radius: float = 0.01  # metres: symmetric affordances this close are one
+    merge_radius: float = TOLERANCES.merge_radius  # metres: symmetric affordances this close are one
     # Plans whose loss is within this of the best count as equally good: the shortest wins.
     tie_tolerance: float = 1e-4
     progress: bool = True

@@ -19,6 +19,7 @@ from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
 from afford.prediction.config import PredictionConfig
 from afford.prediction.model import PredictionNet
+from afford.sim.constants import TOLERANCES
 from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "prediction"
@@ -127,7 +128,7 @@ def _effects(seq, t: int) -> set[str]:
         if slot.startswith("cup") and was and now and seq.held[t + 1] != k:
             if _upright(before[k]) and not _upright(after[k]):
                 seen.add("cup topples")
-            moved = np.linalg.norm(after[k, :2] - before[k, :2]) > 0.03
+            moved = np.linalg.norm(after[k, :2] - before[k, :2]) > TOLERANCES.position
             # Carried round on the block: raised before and after, still upright (a cup
             # flung off by the turn lands on the table or on its side).
             carried = before[k, 2] > 0.06 and after[k, 2] > 0.06 and _upright(after[k])
@@ -159,7 +160,7 @@ def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]
 def _upright(pose: np.ndarray) -> bool:
     w, x, y, z = pose[3:7]
     up_z = 1 - 2 * (x * x + y * y)  # z component of the body's z axis
-    return up_z > 0.9
+    return up_z > TOLERANCES.upright_cos
 
 
 @torch.no_grad()

@@ -14,13 +14,13 @@ from dataclasses import asdict, dataclass, replace
 import mujoco
 import numpy as np
 
-from afford.sim.constants import BLOCK, GRIPPER, MOTION, SUPPORT
+from afford.sim.constants import BLOCK, GRIPPER, MOTION, SUPPORT, TOLERANCES
 from afford.sim.mjcf import PROBE_BODIES, park_position
 
 TYPES = ("grasp", "place", "turn")
 QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)
 TURN_PARAMETERS = (90, -90)
-UPRIGHT_COS = 0.9  # a cup whose axis is this close to vertical is rotationally symmetric
+UPRIGHT_COS = TOLERANCES.upright_cos  # a cup this upright is rotationally symmetric
 
 
 @dataclass(frozen=True)

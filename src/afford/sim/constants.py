@@ -168,6 +168,16 @@ class Limits:
     blocks: int = 1
 
 
+@dataclass(frozen=True)
+class Tolerances:
+    """How states are judged: one value each for the detector, the planners, the predicates
+    and the evaluation."""
+
+    upright_cos: float = 0.9  # an axis this close to vertical (cosine) is upright
+    position: float = 0.03  # metres: an object this near where it should be is there
+    merge_radius: float = 0.01  # metres: symmetric affordances of one type this close are one
+
+
 UR3_DH = UR3()
 GRIPPER = Gripper()
 CUP = Cup()
@@ -180,6 +190,7 @@ WORK_AREA = WorkArea()
 PHYSICS = Physics()
 MOTION = Motion()
 LIMITS = Limits()
+TOLERANCES = Tolerances()
 
 KINDS = ("cup", "ball", "support", "block")
 GRASPABLE = ("cup", "ball", "block")

@@ -149,3 +149,17 @@ def test_plan_cli_refuses_a_huge_tree_in_one_line(tmp_path):
     r = afford("plan", "--task", str(deep), "--max-nodes", "30", "--out", str(tmp_path), "--json")
     assert r.returncode == 2 and r.stderr.count("\n") == 1
     assert "would add" in r.stderr and "--max-nodes" in r.stderr
+
+
+def test_bench_random_gives_the_same_tasks_and_results_on_two_workers():
+    import torch
+
+    from afford.planning.random_bench import BenchSpec, run
+
+    threads = torch.get_num_threads()
+    spec = BenchSpec(max_steps=1, planners=("symbolic",))
+    one = list(run(spec, 3, first_seed=0, workers=1))  # in this process: it sets torch's threads
+    torch.set_num_threads(threads)
+    two = list(run(spec, 3, first_seed=0, workers=2))
+    assert [r["seed"] for r in one] == [r["seed"] for r in two]
+    assert [r["symbolic"]["score"] for r in one] == [r["symbolic"]["score"] for r in two]

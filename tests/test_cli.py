@@ -34,3 +34,14 @@ def test_demo_writes_strip(tmp_path):
     r = afford("demo", "--seed", "1", "--steps", "2", "--out", str(tmp_path / "d.png"))
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "d.png").stat().st_size > 1000
+
+
+def test_ctrl_c_anywhere_ends_in_one_line_with_exit_130(monkeypatch, capsys):
+    import afford.cli.main as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt  # as Ctrl-C would, in the middle of a command
+
+    monkeypatch.setattr(cli, "cmd_scene", interrupted)
+    assert cli.main(["scene", "--seed", "0"]) == 130
+    assert capsys.readouterr().err == "afford: interrupted\n"

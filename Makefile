@@ -44,7 +44,8 @@ bench: install
 	$(PY) benchmarks/prediction_speed.py
 	$(PY) benchmarks/learned_planning.py
 	$(VENV)/bin/afford bench tasks --planner all
-	$(VENV)/bin/afford bench random --n 50 --seed 0 --max-steps 2 --planner all
+	$(VENV)/bin/afford bench random --n 100 --seed 0 --max-steps 2 --planner all
+	$(VENV)/bin/afford bench random --n 100 --seed 0 --max-steps 3 --planner all
 
 clean:
 	rm -rf $(VENV) out

@@ -49,7 +49,7 @@ class Diagnosis:
     task: str
     cause: str
     learned: Outcome
-    oracle: Outcome
+    oracle: Outcome | None  # None when the learned plan succeeded
     steps: list[StepCheck] = field(default_factory=list)
     chosen_true_loss: float | None = None  # eq. (5) on the executed learned plan's end state
 
@@ -60,7 +60,7 @@ class Diagnosis:
             "learned_plan": [a.to_dict() for a in self.learned.plan or ()],
             "learned_predicted_loss": self.learned.loss,
             "learned_true_loss": self.chosen_true_loss,
-            "oracle_plan": [a.to_dict() for a in self.oracle.plan or ()],
+            "oracle_plan": [a.to_dict() for a in self.oracle.plan or ()] if self.oracle else None,
             "oracle_steps": [vars(s) for s in self.steps],
         }
 
@@ -86,9 +86,9 @@ def diagnose(task: Task, scene: Scene, learned, config: SearchConfig | None = No
     config = config or SearchConfig(progress=False)
     mine = solve(task, "learned", scene, config, learned)
     chosen_true = float(task.goal.loss(mine.executed[-1][None])[0])
+    if mine.success:  # nothing to explain, and no oracle tree to grow
+        return Diagnosis(task.name, "solved", mine, None, chosen_true_loss=chosen_true)
     oracle = solve(task, "oracle", scene, config)
-    if mine.success:
-        return Diagnosis(task.name, "solved", mine, oracle, chosen_true_loss=chosen_true)
     if not oracle.success:
         return Diagnosis(task.name, "oracle fails", mine, oracle, chosen_true_loss=chosen_true)
     model = LearnedModel(scene, task.scene, *learned)

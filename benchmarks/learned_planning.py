@@ -35,7 +35,8 @@ def main() -> None:
     result = {"task": task.name, "max_steps": task.max_steps, "threads": args.threads}
     plans = {}
     for mode, rerun in (("kept_latents", False), ("rerun_from_root", True)):
-        model = LearnedModel(scene, task.scene, recognizer, predictor, rerun_from_root=rerun)
+        scene.reset(task.scene)
+        model = LearnedModel(scene.observe(), recognizer, predictor, rerun_from_root=rerun)
         r = search(model, task.goal, task.max_steps, SearchConfig(progress=False))
         plans[mode] = [a.to_dict() for a in r.plan]
         result[mode] = {"seconds": round(r.seconds, 2), "nodes": len(r.nodes), "p_d_steps": model.p_steps}

@@ -35,8 +35,10 @@ def _models(scene):
     torch.manual_seed(0)
     recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"])
     predictor = PredictionNet(PRED["tiny"])
-    keep = LearnedModel(scene, SPECS, recognizer, predictor)
-    rerun = LearnedModel(scene, SPECS, recognizer, predictor, rerun_from_root=True)
+    scene.reset(SPECS)
+    start = scene.observe()
+    keep = LearnedModel(start, recognizer, predictor)
+    rerun = LearnedModel(start, recognizer, predictor, rerun_from_root=True)
     return keep, rerun
 
 

@@ -91,7 +91,8 @@ def diagnose(task: Task, scene: Scene, learned, config: SearchConfig | None = No
     oracle = solve(task, "oracle", scene, config)
     if not oracle.success:
         return Diagnosis(task.name, "oracle fails", mine, oracle, chosen_true_loss=chosen_true)
-    model = LearnedModel(scene, task.scene, *learned)
+    scene.reset(task.scene)
+    model = LearnedModel(scene.observe(), *learned)
     truth = execute_plan(scene, task.scene, oracle.plan, task.success).images
     image, state = model.root()
     node = Node((), image, state)

@@ -21,7 +21,6 @@ from afford.prediction.evaluate import load_net as load_prediction
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
 from afford.sim.affordances import Affordance
-from afford.sim.scene import ObjectSpec, Scene
 
 WEIGHTS = Path(__file__).resolve().parent.parent / "weights"  # shipped with the package
 RECOGNITION_FILE = "recognition.safetensors"
@@ -53,18 +52,17 @@ def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
 
 
 class LearnedModel:
-    """A `WorldModel` of the trained nets, started from the real image of `specs`."""
+    """A `WorldModel` of the trained nets, started from the real RGBD image the caller gives
+    (it needs no simulator: only the camera's view of the start)."""
 
     def __init__(
         self,
-        scene: Scene,
-        specs: list[ObjectSpec],
+        image: np.ndarray,
         recognizer: Recognizer,
         predictor: PredictionNet,
         rerun_from_root: bool = False,
     ):
-        scene.reset(specs)
-        self.image = scene.observe()
+        self.image = np.asarray(image, dtype=np.float32)
         self.recognizer = recognizer
         self.net = predictor.eval()
         self.rerun_from_root = rerun_from_root

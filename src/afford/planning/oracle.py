@@ -17,11 +17,10 @@ from afford.sim.scene import ObjectSpec, Scene
 
 
 class OracleModel:
-    """A `WorldModel` backed by a `Scene` started from `specs`."""
+    """A `WorldModel` backed by a `Scene`, started from the state the caller put it in."""
 
-    def __init__(self, scene: Scene, specs: list[ObjectSpec]):
+    def __init__(self, scene: Scene):
         self.scene = scene
-        scene.reset(specs)
         self._root = scene.snapshot()
 
     def root(self):

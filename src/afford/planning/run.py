@@ -77,7 +77,8 @@ def solve(
 
 
 def _oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
-    return _solve_search(task, "oracle", OracleModel(scene, task.scene), scene, config)
+    scene.reset(task.scene)
+    return _solve_search(task, "oracle", OracleModel(scene), scene, config)
 
 
 def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
@@ -85,7 +86,8 @@ def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome
         from afford.planning.learned import load_learned
 
         learned = load_learned()
-    return _solve_search(task, "learned", LearnedModel(scene, task.scene, *learned), scene, config)
+    scene.reset(task.scene)
+    return _solve_search(task, "learned", LearnedModel(scene.observe(), *learned), scene, config)
 
 
 def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:

@@ -90,7 +90,7 @@ def cmd_demo(args) -> int:
         panels.append(
             label(
                 draw_affordances(to_pil(image), [a]),
-                f"{step}: {a.type}" + (f" {a.turn:+d}" if a.type == "turn" else ""),
+                f"{step}: {a.type}" + (f" {a.turn:+d}" if a.turn else ""),
             )
         )
         scene.execute(a)

@@ -25,6 +25,7 @@ import numpy as np
 
 from afford.planning.predicates import Predicate, rests_on
 from afford.planning.tree import edges
+from afford.sim.affordance_types import REGISTRY
 from afford.sim.affordances import Affordance
 from afford.sim.camera import world_to_pixel
 from afford.sim.constants import MOTION, TOLERANCES
@@ -143,33 +144,45 @@ class CanonicalWorld:
         return out
 
     def apply(self, state: SymbolicState, aff: Affordance) -> SymbolicState | None:
-        """The canonical effect of `aff`; None where it acts on nothing."""
+        """The canonical effect of `aff` (its type's `canonical`); None where it acts on nothing."""
+        return REGISTRY[aff.type].canonical(self, state, aff)
+
+    # The canonical effects' parts, for the affordance types (sim/affordance_types/).
+    def object_at(self, state: SymbolicState, point: np.ndarray) -> str | None:
+        """The graspable object whose centre is within grasp reach of `point`, if any."""
+        poses = dict(state.poses)
+        target = min(
+            (n for n in self.names if self.kinds[n] != "support"),
+            key=lambda n: np.linalg.norm(np.asarray(poses[n].pos) - point),
+        )
+        return (
+            target if np.linalg.norm(np.asarray(poses[target].pos) - point) <= MOTION.grasp_radius else None
+        )
+
+    def held(self, state: SymbolicState, name: str, aff: Affordance) -> SymbolicState:
+        """`name` lifted off its host and held where `aff` grasped it."""
+        hosts = dict(state.hosts)
+        hosts.pop(name, None)
+        grasp = (*(float(v) for v in aff.position), aff.angle)
+        return SymbolicState(state.poses, tuple(hosts.items()), name, grasp)
+
+    def turned(self, state: SymbolicState, name: str, degrees: float) -> SymbolicState:
+        """`name` and everything on it turned about its centre."""
+        poses = dict(state.poses)
+        centre = np.asarray(poses[name].pos)
+        moved = [name, *self.riders(state, name)]
+        return self._moved(poses, dict(state.hosts), moved, centre, centre, degrees)
+
+    def placed(self, state: SymbolicState, aff: Affordance) -> SymbolicState:
+        """The held object (and its riders) turned by the change of gripper angle about the
+        grasp point, which moves to above the place point; it rests on the point's host."""
         poses = dict(state.poses)
         hosts = dict(state.hosts)
         point = np.asarray(aff.position)
-        if aff.type in ("grasp", "turn"):
-            target = min(
-                (n for n in self.names if self.kinds[n] != "support"),
-                key=lambda n: np.linalg.norm(np.asarray(poses[n].pos) - point),
-            )
-            if np.linalg.norm(np.asarray(poses[target].pos) - point) > MOTION.grasp_radius:
-                return None
-            if aff.type == "grasp":
-                hosts.pop(target, None)
-                return SymbolicState(
-                    state.poses, tuple(hosts.items()), target, (*(float(v) for v in point), aff.angle)
-                )
-            moved = [target, *self.riders(state, target)]
-            centre = np.asarray(poses[target].pos)
-            return self._moved(poses, hosts, moved, centre, centre, aff.turn)
-        # place: the held object (and its riders) turns by the change of gripper angle about the
-        # grasp point, which moves to above P; the object comes to rest on P's host.
         name = state.held
         gx, gy, gz, angle = state.grasp
-        drop = self._held_drop(state)
-        target = point + np.array([0.0, 0.0, drop])
-        host = self._host_at(state, point, name)
-        hosts[name] = host
+        target = point + np.array([0.0, 0.0, self._held_drop(state)])
+        hosts[name] = self._host_at(state, point, name)
         moved = [name, *self.riders(state, name)]
         return self._moved(poses, hosts, moved, np.array([gx, gy, gz]), target, aff.angle - angle)
 

@@ -19,6 +19,7 @@ from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
 from afford.prediction.config import PredictionConfig
 from afford.prediction.model import PredictionNet
+from afford.sim.affordances import TYPES
 from afford.sim.constants import TOLERANCES
 from afford.training.checkpoint import load_net_from_checkpoint
 
@@ -112,7 +113,7 @@ def evaluate(
 # ---------------------------------------------------------------------------- pictures
 # The canonical effects (the first step executing that type with no side effect), then the
 # non-canonical ones, found from the true poses.
-CANONICAL = ("grasp", "place", "turn")
+CANONICAL = TYPES  # one picture of each type's plain effect
 EVENTS = (*CANONICAL, "falls off the table", "cup topples", "cup turns with the block", "ball rolls away")
 
 

@@ -34,7 +34,7 @@ class RecognitionConfig:
     w_sym: float = 0.5
     # Per type (in `types` order): the weight of an affordance's confidence, type and
     # regression terms. Turns are 4% of the affordances and the type recognised worst.
-    type_weights: tuple[float, ...] = (1.0, 1.0, 1.0)
+    type_weights: tuple[float, ...] = ()  # types not listed (all, here) weigh 1
     # Inference.
     confidence: float = 0.5  # default cut-off; `afford eval recognition` tunes it on val
     suppress_radius: float = 0.025  # metres: duplicates closer than this ...

@@ -11,6 +11,7 @@ from afford.data.format import Dataset
 from afford.recognition.infer import THRESHOLD_FILE, Recognizer
 from afford.recognition.metrics import Tally
 from afford.recognition.targets import Detection
+from afford.sim.affordances import TYPES
 
 THRESHOLDS = tuple(np.round(np.arange(0.30, 0.96, 0.05), 2))
 TRAIN_EXAMPLES = 100  # the paper's Table 1 also reports 100 training examples
@@ -123,10 +124,7 @@ def format_table(result: dict) -> str:
     lines.append(f"{'':8s} {'grasp':>18s} {'place':>18s} {'turn':>18s} {'all':>18s} {'spurious/img':>13s}")
     for name in ("test", "train"):
         r = result[name]["recall"]
-        cells = [
-            f"{r[t]['recall']:.3f} ({r[t]['hits']}/{r[t]['total']})"
-            for t in ("grasp", "place", "turn", "all")
-        ]
+        cells = [f"{r[t]['recall']:.3f} ({r[t]['hits']}/{r[t]['total']})" for t in (*TYPES, "all")]
         lines.append(
             f"{name:8s} "
             + " ".join(f"{c:>18s}" for c in cells)

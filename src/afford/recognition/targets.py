@@ -122,7 +122,8 @@ def loss(
     an affordance, the most accurate then scores highest and survives suppression, and a cell
     whose angle is off scores low instead of becoming a confident spurious detection."""
     conf, type_logits, xy, angle, z, sym = _split(raw, config)
-    type_weights = raw.new_tensor(config.type_weights)
+    given = list(config.type_weights)[: len(config.types)]
+    type_weights = raw.new_tensor(given + [1.0] * (len(config.types) - len(given)))  # unlisted types: 1
     # A positive cell weighs as its heaviest type; negatives weigh 1.
     cell_weight = torch.where(
         targets.obj > 0, (targets.types * type_weights).amax(-1), torch.ones_like(targets.obj)

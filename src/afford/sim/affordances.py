@@ -14,13 +14,11 @@ from dataclasses import asdict, dataclass, replace
 import mujoco
 import numpy as np
 
-from afford.sim.constants import BLOCK, GRIPPER, MOTION, SUPPORT, TOLERANCES
+from afford.sim.affordance_types import REGISTRY, TYPES
+from afford.sim.constants import GRIPPER
 from afford.sim.mjcf import PROBE_BODIES, park_position
 
-TYPES = ("grasp", "place", "turn")
-QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)
-TURN_PARAMETERS = (90, -90)
-UPRIGHT_COS = TOLERANCES.upright_cos  # a cup this upright is rotationally symmetric
+__all__ = ["TYPES", "Affordance", "detect", "parametrise", "hand_pose"]
 
 
 @dataclass(frozen=True)
@@ -71,8 +69,9 @@ def parametrise(affordances: list[Affordance]) -> list[Affordance]:
     """Fill in execution parameters: each turn becomes +90 and -90 (paper II.D)."""
     out = []
     for a in affordances:
-        if a.type == "turn" and a.turn == 0:
-            out.extend(a.with_turn(t) for t in TURN_PARAMETERS)
+        parameters = REGISTRY[a.type].parameters
+        if parameters and a.turn == 0:
+            out.extend(a.with_turn(t) for t in parameters)
         else:
             out.append(a)
     return out
@@ -85,29 +84,6 @@ def hand_pose(tcp: np.ndarray, yaw_deg: float) -> tuple[np.ndarray, np.ndarray]:
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, rot.flatten())
     return tcp + np.array([0.0, 0.0, GRIPPER.tcp_depth]), quat
-
-
-def _rot(quat: np.ndarray) -> np.ndarray:
-    m = np.zeros(9)
-    mujoco.mju_quat2Mat(m, quat)
-    return m.reshape(3, 3)
-
-
-def _top_point(pos: np.ndarray, quat: np.ndarray, half: tuple[float, float, float], along_x: float = 0.0):
-    """A point on the upward-facing face of a box, `along_x` from its centre along its x axis.
-
-    Returns None when the box stands on its end (its x axis is the one pointing up).
-    """
-    rot = _rot(quat)
-    k = int(np.argmax(np.abs(rot[2, :])))
-    if k == 0 and along_x != 0.0:
-        return None
-    up = np.sign(rot[2, k]) * rot[:, k] * half[k]
-    return pos + rot[:, 0] * along_x + up
-
-
-def _axis_yaw(vec: np.ndarray) -> float:
-    return float(np.degrees(np.arctan2(vec[1], vec[0])) % 360.0)
 
 
 class _Checker:
@@ -169,7 +145,8 @@ class _Checker:
 
 
 def detect(scene) -> list[Affordance]:
-    """The ground-truth affordance list of the scene's current state (paper III.B)."""
+    """The ground-truth affordance list of the scene's current state (paper III.B): object by
+    object, each registered type that the gripper state allows proposes its candidates."""
     check = _Checker(scene)
     found: list[Affordance] = []
 
@@ -181,35 +158,11 @@ def detect(scene) -> list[Affordance]:
             if check.free(tcp, angle):
                 found.append(Affordance(kind, tuple(float(v) for v in point), angle, bool(symmetric)))
 
-    objects = [o for o in scene.objects() if not o.held]
-    if scene.held is None:
-        for o in objects:
-            if o.kind in ("cup", "ball"):
-                axis = o.up_axis
-                upright = o.kind == "ball" or abs(axis[2]) > UPRIGHT_COS
-                base = 0.0 if upright else _axis_yaw(axis)
-                consider("grasp", o.pos, o.pos, [base + q for q in QUARTER_TURNS], upright)
-            elif o.kind == "block":
-                # Fingers close across the block's width: the angle follows its long axis.
-                angle = (_axis_yaw(_rot(o.quat)[:, 0]) + 90.0) % 180.0
-                n = len(found)
-                consider("grasp", o.pos, o.pos, [angle], False)
-                if len(found) > n:
-                    found.append(Affordance("turn", tuple(float(v) for v in o.pos), angle, False))
-    else:
-        held_kind = scene.kind_of[scene.held]
-        symmetric = held_kind == "ball" or (
-            held_kind == "cup" and abs(_rot(check.rel_quat)[2, 2]) > UPRIGHT_COS
-        )
-        lift = np.array([0.0, 0.0, scene.held_drop + MOTION.place_clearance])
-        for o in objects:
-            if o.kind == "support":
-                points = [_top_point(o.pos, o.quat, SUPPORT.half)]
-            elif o.kind == "block" and held_kind != "block":
-                points = [_top_point(o.pos, o.quat, BLOCK.half, dx) for dx in BLOCK.place_offsets]
-            else:
-                continue
-            for p in points:
-                if p is not None:
-                    consider("place", p, p + lift, QUARTER_TURNS, symmetric)
+    holding = scene.held is not None
+    held_kind = scene.kind_of[scene.held] if holding else None
+    kinds = [k for k in REGISTRY.values() if k.holding == holding]
+    for o in scene.objects():
+        if not o.held:
+            for kind in kinds:
+                kind.find(scene, o, consider, held_kind)
     return found

@@ -12,9 +12,10 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
+from afford.sim.affordance_types import REGISTRY
 from afford.sim.camera import world_to_pixel
 
-TYPE_COLOURS = {"grasp": (40, 220, 60), "place": (30, 200, 255), "turn": (255, 40, 220)}
+TYPE_COLOURS = {name: kind.colour for name, kind in REGISTRY.items()}
 SCALE = 4
 
 
@@ -44,9 +45,9 @@ def draw_affordances(pil: Image.Image, affordances, scale: int = SCALE) -> Image
         # Image rows grow downwards while world y grows upwards: flip the y component.
         tip = (col + length * np.cos(angle), row - length * np.sin(angle))
         d.line([(col, row), tip], fill=(0, 0, 0) if a.symmetric else (255, 255, 255), width=2)
-        r = 2 * scale if a.type != "place" else 1.5 * scale
+        r = REGISTRY[a.type].marker * scale
         d.ellipse([col - r, row - r, col + r, row + r], outline=colour, width=2)
-        if a.type == "turn" and a.turn:
+        if a.turn:  # an execution parameter: its direction as an arc
             sign = 1 if a.turn > 0 else -1
             arc = [col - 3 * r, row - 3 * r, col + 3 * r, row + 3 * r]
             start = -np.degrees(angle)

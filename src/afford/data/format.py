@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from afford.sim.affordances import TYPES, Affordance
+from afford.sim.affordance_types import type_index, type_name
+from afford.sim.affordances import Affordance
 
 FORMAT = "afford-sequences"
 FORMAT_VERSION = 1
@@ -59,14 +60,14 @@ class DataError(ValueError):
 
 def encode_affordance(a: Affordance) -> np.ndarray:
     row = np.zeros(AFF_WIDTH, dtype=np.float32)
-    row[Col.TYPE], row[Col.POSITION], row[Col.ANGLE] = TYPES.index(a.type), a.position, a.angle
+    row[Col.TYPE], row[Col.POSITION], row[Col.ANGLE] = type_index(a.type), a.position, a.angle
     row[Col.SYMMETRIC], row[Col.TURN] = float(a.symmetric), a.turn
     return row
 
 
 def decode_affordance(row: np.ndarray) -> Affordance:
     return Affordance(
-        TYPES[int(row[Col.TYPE])],
+        type_name(int(row[Col.TYPE])),
         tuple(float(v) for v in row[Col.POSITION]),
         float(row[Col.ANGLE]),
         bool(row[Col.SYMMETRIC] > 0.5),

@@ -40,8 +40,8 @@ class Affordance:
     turn: int = 0
 
     def __post_init__(self):
-        if self.type not in TYPES:
-            raise ValueError(f"unknown affordance type {self.type!r}; expected one of {TYPES}")
+        if self.type not in REGISTRY:
+            raise ValueError(f"unknown affordance type {self.type!r}; expected one of {tuple(REGISTRY)}")
         if self.turn not in (0, 90, -90):
             raise ValueError(f"turn must be +90, -90 or 0, not {self.turn}")
 

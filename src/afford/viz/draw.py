@@ -15,7 +15,6 @@ from PIL import Image, ImageDraw
 from afford.sim.affordance_types import REGISTRY
 from afford.sim.camera import world_to_pixel
 
-TYPE_COLOURS = {name: kind.colour for name, kind in REGISTRY.items()}
 SCALE = 4
 
 
@@ -39,7 +38,7 @@ def draw_affordances(pil: Image.Image, affordances, scale: int = SCALE) -> Image
     d = ImageDraw.Draw(pil)
     for a in affordances:
         col, row = world_to_pixel(np.asarray(a.position)) * scale
-        colour = TYPE_COLOURS[a.type]
+        colour = REGISTRY[a.type].colour
         angle = np.radians(a.angle)
         length = 5 * scale
         # Image rows grow downwards while world y grows upwards: flip the y component.

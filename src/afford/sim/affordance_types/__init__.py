@@ -39,6 +39,15 @@ def register(kind: AffordanceType) -> AffordanceType:
     return kind
 
 
+def type_index(name: str) -> int:
+    """A type's index in the data: its place in the registration order."""
+    return list(REGISTRY).index(name)
+
+
+def type_name(index: int) -> str:
+    return list(REGISTRY)[index]
+
+
 from afford.sim.affordance_types import grasp, place, turn  # noqa: E402, F401  (order = type index)
 
 TYPES = tuple(REGISTRY)

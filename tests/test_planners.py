@@ -57,6 +57,16 @@ def afford(*args):
     )
 
 
+def here(capsys, *args):
+    """The CLI in this process (no interpreter start-up): the same result as `afford`."""
+    from afford.cli.main import main
+
+    capsys.readouterr()
+    code = main(list(args))
+    out = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, out.out, out.err)
+
+
 def test_plan_cli_symbolic_writes_picture_and_record(tmp_path):
     r = afford(
         "plan",
@@ -81,14 +91,14 @@ def test_plan_cli_rejects_bad_task_in_one_line(tmp_path):
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "max_steps" in r.stderr
 
 
-def test_bench_tasks_cli_tables_a_folder(tmp_path):
+def test_bench_tasks_cli_tables_a_folder(tmp_path, capsys):
     (tmp_path / "toy.json").write_text(json.dumps(GOOD))
-    r = afford("bench", "tasks", "--planner", "oracle", "--tasks", str(tmp_path), "--json")
+    r = here(capsys, "bench", "tasks", "--planner", "oracle", "--tasks", str(tmp_path), "--json")
     assert r.returncode == 0, r.stderr
     table = json.loads(r.stdout)["oracle"]
     assert table["solved"] == 1 and table["tasks"][0]["plan_length"] == 2
     assert table["tasks"][0]["planning_seconds"] >= 0
-    empty = afford("bench", "tasks", "--tasks", str(tmp_path / "none"))
+    empty = here(capsys, "bench", "tasks", "--tasks", str(tmp_path / "none"))
     assert empty.returncode == 2 and "no task files" in empty.stderr
 
 
@@ -129,9 +139,10 @@ def test_wilson_interval():
     assert wilson(0, 20)[0] == 0.0 and wilson(20, 20)[1] == 1.0 and wilson(20, 20)[0] > 0.8
 
 
-def test_bench_random_cli_gives_intervals(tmp_path):
+def test_bench_random_cli_gives_intervals(tmp_path, capsys):
     out = tmp_path / "random.json"
-    r = afford(
+    r = here(
+        capsys,
         "bench", "random", "--n", "2", "--max-steps", "1", "--planner", "symbolic",
         "--workers", "1", "--json", "--out", str(out),
     )  # fmt: skip
@@ -139,14 +150,14 @@ def test_bench_random_cli_gives_intervals(tmp_path):
     summary = json.loads(r.stdout)["summary"]["symbolic"]
     assert 0 <= summary["ci95"][0] <= summary["success"] <= summary["ci95"][1] <= 1
     assert json.loads(out.read_text())["n"] == 2
-    bad = afford("bench", "random", "--time-limit", "0")
+    bad = here(capsys, "bench", "random", "--time-limit", "0")
     assert bad.returncode == 2 and "--time-limit" in bad.stderr
 
 
-def test_plan_cli_refuses_a_huge_tree_in_one_line(tmp_path):
+def test_plan_cli_refuses_a_huge_tree_in_one_line(tmp_path, capsys):
     deep = tmp_path / "deep.json"
     deep.write_text(json.dumps({**json.loads((PAPER / "01-order.json").read_text()), "max_steps": 8}))
-    r = afford("plan", "--task", str(deep), "--max-nodes", "30", "--out", str(tmp_path), "--json")
+    r = here(capsys, "plan", "--task", str(deep), "--max-nodes", "30", "--out", str(tmp_path), "--json")
     assert r.returncode == 2 and r.stderr.count("\n") == 1
     assert "would add" in r.stderr and "--max-nodes" in r.stderr
 

@@ -104,7 +104,7 @@ class SlowWorld(LineWorld):
     def predict(self, parents, actions):
         import time
 
-        time.sleep(0.02 * len(parents))
+        time.sleep(0.005 * len(parents))
         return super().predict(parents, actions)
 
 
@@ -112,7 +112,7 @@ def test_time_limit_stops_the_tree_and_still_plans():
     goal = Goal(picture(4))
     free = search(SlowWorld(), goal, 3, SearchConfig(progress=False, batch_size=1))
     assert not free.truncated and len(free.per_depth) == 4
-    cut = search(SlowWorld(), goal, 3, SearchConfig(progress=False, batch_size=1, time_limit=0.05))
+    cut = search(SlowWorld(), goal, 3, SearchConfig(progress=False, batch_size=1, time_limit=0.02))
     assert cut.truncated and len(cut.nodes) < len(free.nodes)
     assert cut.best < len(cut.nodes)  # a plan from the states grown so far
 

@@ -3,7 +3,6 @@ Python API: one line naming the file, the object and the field."""
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -92,25 +91,15 @@ def _scene_json(objects):
     }
 
 
-def test_scene_file_and_task_file_name_the_file_object_and_field(scene, tmp_path):
+def test_scene_file_and_task_file_name_the_file_object_and_field(scene, tmp_path, capsys):
     objects = BAD[0][1]
     path = tmp_path / "start.json"
     path.write_text(json.dumps(_scene_json(objects)))
-    r = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "afford.cli.main",
-            "scene",
-            "--load",
-            str(path),
-            "--out",
-            str(tmp_path / "x.png"),
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-    )
+    from afford.cli.main import main
+
+    capsys.readouterr()
+    code = main(["scene", "--load", str(path), "--out", str(tmp_path / "a.png")])
+    r = subprocess.CompletedProcess([], code, "", capsys.readouterr().err)
     assert r.returncode == 2 and r.stderr.count("\n") == 1
     assert "start.json: objects[0] (ball0).pos: x = 0.6 is off the table" in r.stderr
     task = tmp_path / "task.json"

@@ -30,8 +30,9 @@ demo: install
 	$(VENV)/bin/afford plan --task $(DEMO_TASK) --planner learned --out out/plan \
 		|| echo "the learned plan missed the goal: see out/plan/"
 
+# Two processes: most tests wait on one core (MuJoCo, a subprocess's start-up), so two share the machine well.
 test: install
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n 2
 
 lint: install
 	$(VENV)/bin/ruff check src tests benchmarks

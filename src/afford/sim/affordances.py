@@ -106,6 +106,7 @@ class _Checker:
             self.held_kind = scene.kind_of[scene.held]
             self.rel_pos, self.rel_quat = scene.held_relpose()
         self._reach: dict[tuple, bool] = {}
+        self._free: dict[tuple, bool] = {}
 
     def reachable(self, tcp: np.ndarray) -> bool:
         key = tuple(np.round(tcp, 4))
@@ -114,7 +115,14 @@ class _Checker:
         return self._reach[key]
 
     def free(self, tcp: np.ndarray, yaw_deg: float) -> bool:
-        """Is the open gripper (with a copy of what it holds) collision-free at this pose?"""
+        """Is the open gripper (with a copy of what it holds) collision-free at this pose?
+        Cached: types that share a commencement pose (grasp and turn the block) probe it once."""
+        key = (*np.round(tcp, 4), round(yaw_deg % 360.0, 3))
+        if key not in self._free:
+            self._free[key] = self._probe(tcp, yaw_deg)
+        return self._free[key]
+
+    def _probe(self, tcp: np.ndarray, yaw_deg: float) -> bool:
         d, m = self.data, self.scene.model
         hp, hq = hand_pose(tcp, yaw_deg)
         d.mocap_pos[self.mocap["empty"]] = hp

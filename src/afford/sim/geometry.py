@@ -5,6 +5,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)  # gripper angles tried where any may fit
+
 
 def rotation(quat: np.ndarray) -> np.ndarray:
     m = np.zeros(9)

@@ -6,8 +6,8 @@ refused the same way everywhere: a `SceneError` (a `ValueError`) whose one line 
 
 - numbers: every position and quaternion component finite, the quaternion not zero;
 - counts: at most LIMITS of each kind;
-- place: the centre over the table and inside the camera's view (both with a footprint's
-  margin), and not far above it;
+- place: the centre over the table (a footprint's margin inside its edge) and inside the
+  camera's view, and not far above it;
 - contacts, asked of MuJoCo with the objects posed and nothing simulated: no two objects, and
   no object and the table or the arm, interpenetrating beyond PENETRATION;
 - support: nothing sunk into the table (its lowest point below the top by more than
@@ -22,18 +22,16 @@ import mujoco
 import numpy as np
 
 from afford.sim import camera as cam
-from afford.sim.constants import BALL, BLOCK, CUP, LIMITS, SUPPORT, TABLE
+from afford.sim.constants import BLOCK, LIMITS, TABLE
+from afford.sim.layout import FOOTPRINT as LAYOUT_FOOTPRINT
 
 PENETRATION = 0.005  # metres of overlap allowed (settling pushes that much apart harmlessly)
 FLOAT = 0.02  # metres of air allowed under an object's lowest point
 RAY_START = 0.005  # rays start this far above the lowest point, outside whatever it touches
 MAX_HEIGHT = 0.5  # metres above the table: no start pose is higher
-FOOTPRINT = {  # a horizontal radius that holds each kind, upright
-    "cup": CUP.radius,
-    "ball": BALL.radius,
-    "support": float(np.hypot(*SUPPORT.half[:2])),
-    "block": BLOCK.half[1],  # the block's width: its length may overhang the view's edge
-}
+# A horizontal radius that holds each kind, upright (the layouts' footprints); the block's is
+# its width: its length may overhang the view's edge.
+FOOTPRINT = LAYOUT_FOOTPRINT | {"block": BLOCK.half[1]}
 LIMIT = {"cup": LIMITS.cups, "ball": LIMITS.balls, "support": LIMITS.supports, "block": LIMITS.blocks}
 
 

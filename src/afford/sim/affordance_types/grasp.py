@@ -7,9 +7,7 @@ import numpy as np
 from afford.sim.affordance_types import AffordanceType, register
 from afford.sim.arm import finger_fraction, nearest_graspable
 from afford.sim.constants import MOTION, TOLERANCES
-from afford.sim.geometry import axis_yaw, rotation
-
-QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)
+from afford.sim.geometry import QUARTER_TURNS, axis_yaw, rotation
 
 
 def block_angle(obj) -> float:

@@ -6,9 +6,7 @@ import numpy as np
 
 from afford.sim.affordance_types import AffordanceType, register
 from afford.sim.constants import BLOCK, MOTION, SUPPORT, TOLERANCES
-from afford.sim.geometry import rotation, top_point
-
-QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)
+from afford.sim.geometry import QUARTER_TURNS, rotation, top_point
 
 
 def find(scene, obj, consider, held_kind) -> None:

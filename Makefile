@@ -18,6 +18,12 @@ $(STAMP): pyproject.toml scripts/setup_system.sh
 
 install: $(STAMP)
 
+# Ray, for the tests of `afford generate --ray`; the core install and the demo do without it.
+CLUSTER := $(VENV)/.cluster
+$(CLUSTER): $(STAMP)
+	$(PY) -m pip install -q -e '.[dev,cluster]'
+	touch $(CLUSTER)
+
 # The learned planner (paper II.D) with the weights shipped in the package: no training step.
 # Task 05 needs a non-canonical effect: cup first, or the block tips (the symbolic baseline's
 # two equally short orders succeed half the time).
@@ -31,7 +37,7 @@ demo: install
 		|| echo "the learned plan missed the goal: see out/plan/"
 
 # Two processes: most tests wait on one core (MuJoCo, a subprocess's start-up), so two share the machine well.
-test: install
+test: install $(CLUSTER)
 	$(PY) -m pytest -q -n 2
 
 lint: install

@@ -21,9 +21,11 @@ def cmd_generate(args) -> int:
         seed=args.seed,
         workers=args.workers,
         shard_size=args.shard_size,
+        executor="ray" if args.ray is not None else "local",
+        address=args.ray or None,
     )
     try:
-        report = generate(args.out, config, progress=not args.json)
+        report = generate(Path(args.out).resolve(), config, progress=not args.json)
     except KeyboardInterrupt:
         print(f"interrupted; finished shards are kept: run the same command again to continue ({args.out})")
         return 130
@@ -33,6 +35,7 @@ def cmd_generate(args) -> int:
         "shards_made": report.made_shards,
         "shards_already_there": report.skipped_shards,
         "shards_remade": report.remade,
+        "executor": config.executor,
         "executions_made": report.executions,
         "failed_executions_redrawn": report.failed_executions,
         "seconds": round(report.seconds, 2),
@@ -194,7 +197,18 @@ def add_parsers(sub) -> None:
     g.add_argument("--out", required=True, metavar="DIR")
     g.add_argument("--sequences", type=int, required=True, metavar="N")
     g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    g.add_argument(
+        "--workers", type=int, default=2, help="parallel processes, or a local Ray instance's CPUs (default 2)"
+    )
+    g.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        metavar="ADDRESS",
+        help="run each shard as a Ray task (pip install 'afford[cluster]'): on a local instance, or "
+        "with ADDRESS on a running cluster ('auto', or HEAD:6379 of `ray start --head`); the output "
+        "folder must then be on storage every node sees",
+    )
     g.add_argument("--shard-size", type=int, default=25, help="sequences per shard (default 25)")
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)

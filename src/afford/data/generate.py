@@ -3,12 +3,15 @@
 Sequence i draws everything from its own generator seeded by (seed, i), and the simulator is
 reset before it, so its content does not depend on the worker that makes it. Workers write
 whole shards atomically (see format.py); a re-run makes only the shards still missing.
+The shards are handed out by an executor: a local process pool here, or Ray tasks on a local
+instance or a cluster (`data/ray_executor.py`); both run the same `make_shard`.
 """
 
 from __future__ import annotations
 
 import multiprocessing as mp
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -43,6 +46,8 @@ class GenerateConfig:
     workers: int = 2
     shard_size: int = 25  # ~10 s of work per shard on one core: little lost to a kill
     max_steps: int = 4  # executions per sequence (paper III.B)
+    executor: str = "local"  # a key of EXECUTORS
+    address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
 
 @dataclass
@@ -112,22 +117,62 @@ def make_sequence(scene: Scene, seed: int, index: int, max_steps: int) -> tuple[
     return seq, failed
 
 
-_worker_scene: Scene | None = None
+@dataclass(frozen=True)
+class ShardJob:
+    root: str  # the dataset folder, as the worker sees it (shared storage on a cluster)
+    shard: int
+    start: int  # first sequence index
+    stop: int
+    seed: int
+    max_steps: int
 
 
-def _shard_job(job: tuple[str, int, int, int, int, int]) -> tuple[int, int, int, int]:
-    """Make and write one shard. Returns (shard, sequences, executions, failed)."""
+@dataclass(frozen=True)
+class ShardResult:
+    shard: int
+    sequences: int
+    executions: int
+    failed: int
+
+
+_worker_scene: Scene | None = None  # one simulator per worker process, made on its first shard
+
+
+def make_shard(job: ShardJob) -> ShardResult:
+    """Make and write one shard; writing it again gives the same bytes, so a retried job is harmless."""
     global _worker_scene
-    root, shard, start, stop, seed, max_steps = job
     if _worker_scene is None:
         _worker_scene = Scene()
     seqs, failed = [], 0
-    for i in range(start, stop):
-        seq, f = make_sequence(_worker_scene, seed, i, max_steps)
+    for i in range(job.start, job.stop):
+        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps)
         seqs.append(seq)
         failed += f
-    write_shard(shard_path(Path(root), shard), seqs)
-    return shard, len(seqs), sum(s.length for s in seqs), failed
+    write_shard(shard_path(Path(job.root), job.shard), seqs)
+    return ShardResult(job.shard, len(seqs), sum(s.length for s in seqs), failed)
+
+
+def run_local(jobs: list[ShardJob], config: GenerateConfig) -> Iterator[ShardResult]:
+    """The jobs in this process, or in a pool of `config.workers` fresh interpreters."""
+    if config.workers <= 1 or len(jobs) <= 1:
+        yield from map(make_shard, jobs)
+        return
+    ctx = mp.get_context("spawn")  # a fresh interpreter per worker: no GL state inherited
+    with ctx.Pool(min(config.workers, len(jobs))) as pool:
+        yield from pool.imap_unordered(make_shard, jobs)
+
+
+def run_ray(jobs: list[ShardJob], config: GenerateConfig) -> Iterator[ShardResult]:
+    from afford.data.ray_executor import run_on_ray
+
+    yield from run_on_ray(jobs, config.workers, config.address)
+
+
+# An executor yields one result per job, in any order, as the jobs finish.
+EXECUTORS: dict[str, Callable[[list[ShardJob], GenerateConfig], Iterator[ShardResult]]] = {
+    "local": run_local,
+    "ray": run_ray,
+}
 
 
 def _manifest_for(config: GenerateConfig) -> Manifest:
@@ -172,9 +217,7 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
     root = Path(root)
     manifest = prepare(root, config)
     report = GenerateReport(config.sequences, 0, 0, 0, 0, 0.0)
-    # Left-overs of a killed run: a shard that was being written is made again.
-    for stale in (root / SHARD_DIR).glob(".*.tmp") if (root / SHARD_DIR).is_dir() else []:
-        stale.unlink(missing_ok=True)
+    _remove_partial_writes(root)
     present, missing = shard_status(root, manifest)
     # Heal: a shard whose checksum fails (a disk error, a copy cut short) is made again.
     for k in tqdm(list(present), desc="check shards", unit="shard", disable=not progress, leave=False):
@@ -188,15 +231,9 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
     report.skipped_shards = len(present)
     done = sum(len(manifest.shard_range(k)) for k in present)
     jobs = [
-        (
-            str(root),
-            k,
-            manifest.shard_range(k).start,
-            manifest.shard_range(k).stop,
-            config.seed,
-            config.max_steps,
-        )
+        ShardJob(str(root), k, r.start, r.stop, config.seed, config.max_steps)
         for k in missing
+        for r in [manifest.shard_range(k)]
     ]
     bar = tqdm(
         total=config.sequences,
@@ -208,24 +245,27 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
     )
     t0 = time.perf_counter()
 
-    def account(result: tuple[int, int, int, int]) -> None:
-        _, n, executions, failed = result
+    def account(result: ShardResult) -> None:
         report.made_shards += 1
-        report.executions += executions
-        report.failed_executions += failed
-        bar.update(n)
+        report.executions += result.executions
+        report.failed_executions += result.failed
+        bar.update(result.sequences)
         bar.set_postfix(exec_per_s=f"{report.executions / max(time.perf_counter() - t0, 1e-9):.1f}")
 
+    if config.executor not in EXECUTORS:
+        raise DataError(f"unknown executor {config.executor!r}; expected one of {', '.join(EXECUTORS)}")
     try:
-        if config.workers <= 1 or len(jobs) <= 1:
-            for job in jobs:
-                account(_shard_job(job))
-        else:
-            ctx = mp.get_context("spawn")  # a fresh interpreter per worker: no GL state inherited
-            with ctx.Pool(min(config.workers, len(jobs))) as pool:
-                for result in pool.imap_unordered(_shard_job, jobs):
-                    account(result)
+        for result in EXECUTORS[config.executor](jobs, config):
+            account(result)
     finally:
         bar.close()
         report.seconds = time.perf_counter() - t0
+    _remove_partial_writes(root)  # a worker killed mid-write (its shard was made again by another)
     return report
+
+
+def _remove_partial_writes(root: Path) -> None:
+    """Temporary files of shards being written when their process was killed; only safe while
+    no worker of this dataset runs."""
+    for stale in (root / SHARD_DIR).glob(".*.tmp") if (root / SHARD_DIR).is_dir() else []:
+        stale.unlink(missing_ok=True)

@@ -8,7 +8,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 from conftest import SMALL_SEQUENCES, SMALL_SHARD
 
 ray = pytest.importorskip("ray", reason="the cluster extra: pip install 'afford[cluster]'")

@@ -198,7 +198,7 @@ def add_parsers(sub) -> None:
     g.add_argument("--sequences", type=int, required=True, metavar="N")
     g.add_argument("--seed", type=int, default=0)
     g.add_argument(
-        "--workers", type=int, default=2, help="parallel processes, or a local Ray instance's CPUs (default 2)"
+        "--workers", type=int, default=2, help="processes, or a local Ray instance's CPUs (default 2)"
     )
     g.add_argument(
         "--ray",

@@ -10,6 +10,7 @@ from afford.cli.errors import CLIError
 
 def cmd_train(args) -> int:
     """Train the net named by `args.net` with its preset and overrides."""
+    from afford.training.distributed import DistributedError, is_main_process, leave_world
     from afford.training.overrides import OverrideError, apply_overrides
 
     if args.net == "recognition":
@@ -29,9 +30,16 @@ def cmd_train(args) -> int:
     try:
         extra = {"predicted": args.predicted} if args.net == "recognition" else {}
         state = train(args.data, config, args.out, progress=not args.json, init=args.init, **extra)
+    except DistributedError as e:
+        raise CLIError(str(e)) from None
     except KeyboardInterrupt:
-        print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
+        if is_main_process():
+            print(f"interrupted; the last checkpoint is in {args.out}: the same command continues it")
         return 130
+    finally:
+        leave_world()
+    if not is_main_process():
+        return 0
     record = {
         "run": str(args.out),
         "steps": state.step,

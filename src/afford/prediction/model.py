@@ -142,6 +142,13 @@ class PredictionNet(nn.Module):
             differences[order[:n], i] = difference
         return states, differences
 
+    def forward(
+        self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Training's forward pass, `rollout_with_differences`: a call through the module, so
+        that DistributedDataParallel sees it."""
+        return self.rollout_with_differences(image, actions, steps)
+
     def rollout(
         self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
     ) -> torch.Tensor:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import torch
+from torch import nn
 from torch.utils.data import DataLoader
 
 from afford.data.augment import AugmentConfig
@@ -15,6 +16,7 @@ from afford.data.torch_data import PredictionData, collate_prediction, worker_in
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
+from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
 
@@ -36,7 +38,7 @@ def change_mask(images: torch.Tensor, predicted: torch.Tensor, repair: bool) -> 
     return ((images[:, 1:] - inputs).abs().amax(2, keepdim=True) > CHANGED).float()
 
 
-def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor):
+def sequence_loss(net: nn.Module, images: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor):
     """The training loss, mean over the real steps of the batch (padded steps are not run).
 
     The paper's is the squared error over the channels, mean over pixels (paper II.C). The
@@ -50,10 +52,12 @@ def sequence_loss(net: PredictionNet, images: torch.Tensor, actions: torch.Tenso
     the step's own input (the previous prediction): then the mask is also taught to open, and
     D to redraw, where an earlier step left an error (a ghost, a blurred object), instead of
     being taught to keep such errors shut in, so they stop compounding through eq. (3).
+
+    `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
-    c = net.config
+    c = getattr(net, "module", net).config
     with torch.autocast("cpu", dtype=torch.bfloat16, enabled=c.bf16):
-        predicted, differences = net.rollout_with_differences(images[:, 0], actions, steps)
+        predicted, differences = net(images[:, 0], actions, steps)
     predicted, differences = predicted.float(), differences.float()
     truth = images[:, 1:]
     diff = predicted - truth
@@ -87,9 +91,11 @@ def train(
     init: str | Path | None = None,
 ) -> LoopState:
     """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
-    another checkpoint's weights (fine-tuning), which must have the same architecture."""
-    torch.set_num_threads(config.threads)
-    torch.manual_seed(0)
+    another checkpoint's weights (fine-tuning), which must have the same architecture. Under
+    torchrun, one rank of a DistributedDataParallel run (`training/distributed.py`)."""
+    world = join_world()
+    torch.set_num_threads(rank_threads(config.threads, world))
+    torch.manual_seed(world.rank)  # each rank its own random stream; rank 0 is a lone run's
     data = Dataset(data_dir)
     augment = AugmentConfig(
         shift_px=config.shift_px,
@@ -98,7 +104,7 @@ def train(
         position_noise=config.position_noise,
         angle_noise=config.angle_noise,
     )
-    train_set = PredictionData(data, "train", config.max_steps, augment)
+    train_set = PredictionData(data, "train", config.max_steps, augment, seed=world.rank)
     val_set = PredictionData(data, "val", config.max_steps, random_start=False)
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = collate_prediction([val_set[int(i)] for i in picks])
@@ -116,17 +122,18 @@ def train(
     )
     loader = DataLoader(
         train_set,
-        batch_size=config.batch_size,
-        shuffle=True,
+        batch_size=rank_batch(config.batch_size, world),
         drop_last=True,
         collate_fn=collate_prediction,
+        **loader_order(None, len(train_set), world),
         **workers,
     )
     net = PredictionNet(config)
+    model = wrap(net, world, idle_parameters=True)
     opt = make_optimizer(net, config)
 
     def train_step(batch):
-        loss = sequence_loss(net, *batch)
+        loss = sequence_loss(model, *batch)
         return loss, {}
 
     def validate() -> dict[str, float]:
@@ -154,6 +161,7 @@ def train(
         # on a cosine decay.
         lr_at=warmup_cosine(config.warmup, config.steps) if config.schedule == "cosine" else None,
         patience=config.patience if config.schedule == "plateau" else None,
+        world=world,
     )
     return run(loop, run_dir, progress)
 

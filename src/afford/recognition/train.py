@@ -18,6 +18,7 @@ from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
+from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
@@ -40,29 +41,36 @@ def train(
     """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
     another checkpoint's weights (fine-tuning), which must have the same architecture;
     `predicted`: a file of predicted states (`data/predicted.py`) that make up
-    `config.predicted_fraction` of the batches, labelled by the true states' affordances."""
-    torch.set_num_threads(config.threads)
-    torch.manual_seed(0)
+    `config.predicted_fraction` of the batches, labelled by the true states' affordances.
+    Under torchrun, one rank of a DistributedDataParallel run (`training/distributed.py`)."""
+    world = join_world()
+    torch.set_num_threads(rank_threads(config.threads, world))
+    torch.manual_seed(world.rank)  # each rank its own random stream; rank 0 is a lone run's
     data = Dataset(data_dir)
     augment = AugmentConfig(shift_px=config.shift_px, mirror=False, angle_flip=False)
-    train_set = RecognitionData(data, "train", augment)
+    train_set = RecognitionData(data, "train", augment, seed=world.rank)
     val_set = RecognitionData(data, "val")
     n_val = min(VAL_IMAGES, len(val_set))
     val_batch = collate_recognition([val_set[i] for i in np.linspace(0, len(val_set) - 1, n_val).astype(int)])
-    order = {"shuffle": True}
+    sampler = None  # a shuffle
     if predicted is not None:
-        futures = PredictedStates(predicted, data, augment)
-        order = {"sampler": mixed_sampler(len(train_set), len(futures), config.predicted_fraction)}
+        futures = PredictedStates(predicted, data, augment, seed=world.rank)
+        sampler = mixed_sampler(len(train_set), len(futures), config.predicted_fraction)
         train_set = ConcatDataset([train_set, futures])
     loader = DataLoader(
-        train_set, batch_size=config.batch_size, drop_last=True, collate_fn=collate_recognition, **order
+        train_set,
+        batch_size=rank_batch(config.batch_size, world),
+        drop_last=True,
+        collate_fn=collate_recognition,
+        **loader_order(sampler, len(train_set), world),
     )
     net = RecognitionNet(config)
+    model = wrap(net, world)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
 
     def train_step(batch):
         images, rows = batch
-        return loss(net(images), build_targets(rows, config), config)
+        return loss(model(images), build_targets(rows, config), config)
 
     def validate() -> dict[str, float]:
         images, rows = val_batch
@@ -85,6 +93,7 @@ def train(
         train_step=train_step,
         validate=validate,
         lr_at=warmup_cosine(config.warmup, config.steps),
+        world=world,
     )
     return run(loop, run_dir, progress)
 

@@ -66,3 +66,19 @@ class RunLog:
 
     def close(self) -> None:
         self.writer.close()
+
+
+class NullLog:
+    """The log of a rank that does not write (every rank but 0 under torchrun)."""
+
+    def add(self, step: int, values: dict[str, float]) -> None:
+        pass
+
+    def truncate_after(self, step: int) -> None:
+        pass
+
+    def plot(self, title: str) -> None:
+        pass
+
+    def close(self) -> None:
+        pass

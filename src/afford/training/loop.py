@@ -3,7 +3,8 @@
 RUN/last.safetensors is rewritten at every evaluation (and on Ctrl-C); a re-run of the same
 command loads it and continues from its step; a run without one starts from `Loop.init`'s
 weights when given (fine-tuning). RUN/best.safetensors keeps the weights with the
-lowest validation loss. RUN/config.json holds the config for people to read.
+lowest validation loss. RUN/config.json holds the config for people to read. Under torchrun
+every rank runs this loop, and only rank 0 writes (`training/distributed.py`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ from afford.training.checkpoint import (
     read_checkpoint,
     save_checkpoint,
 )
-from afford.training.log import RunLog
+from afford.training.distributed import World, mean_over_ranks
+from afford.training.log import NullLog, RunLog
 
 LAST, BEST = "last.safetensors", "best.safetensors"
 
@@ -52,6 +54,7 @@ class Loop:
     lr_at: Callable[[int], float] | None = None  # lr multiplier by step (warm-up, cosine)
     patience: int | None = None  # halve the lr after this many evaluations without improvement
     init: str | Path | None = None  # a new run starts from these weights (fine-tuning)
+    world: World = World()  # this process's rank among torchrun's; alone by default
 
 
 def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:
@@ -79,7 +82,8 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
     run_dir.mkdir(parents=True, exist_ok=True)
     config_dict = asdict(loop.config)
     state = LoopState()
-    log = RunLog(run_dir)
+    main = loop.world.main  # the one rank that writes
+    log = RunLog(run_dir) if main else NullLog()
     if (run_dir / LAST).is_file():
         tensors, meta = read_checkpoint(run_dir / LAST, loop.kind)
         load_model_state(loop.model, tensors, run_dir / LAST)
@@ -88,9 +92,12 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
         log.truncate_after(state.step)
     elif loop.init is not None:
         load_model_state(loop.model, read_checkpoint(loop.init, loop.kind)[0], loop.init)
-    (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
+    if main:
+        (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
 
     def save(path: str) -> None:
+        if not main:
+            return
         save_checkpoint(
             run_dir / path,
             loop.model,
@@ -131,7 +138,7 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
     bar = tqdm(
         total=loop.config.steps,
         initial=state.step,
-        disable=not progress,
+        disable=not (progress and main),
         desc=f"train {loop.kind}",
         unit="step",
     )
@@ -151,8 +158,9 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
                 running[k] = running.get(k, 0.0) + v
             if state.step % loop.config.log_every == 0:
                 n = loop.config.log_every
-                log.add(state.step, {f"train/{k}": v / n for k, v in running.items()} | {"lr": _lr(loop)})
-                bar.set_postfix(loss=f"{running['loss'] / n:.4f}")
+                means = mean_over_ranks({k: v / n for k, v in running.items()}, loop.world)
+                log.add(state.step, {f"train/{k}": v for k, v in means.items()} | {"lr": _lr(loop)})
+                bar.set_postfix(loss=f"{means['loss']:.4f}")
                 running = {}
             bar.update(1)
             if state.step % loop.config.eval_every == 0 or state.step == loop.config.steps:

@@ -7,6 +7,10 @@ state is scored against the goal image, eq. (5). The search is breadth-first to 
 and batched per depth level; the plan is the node of least loss (positive goal) or greatest
 loss (negative goal), eq. (4).
 
+Breadth-first is the paper's search; guided strategies that expand the states closest to the
+goal first (section V's "heuristics to constrain which branches are expanded") share its
+growing steps and are in `guided.py`.
+
 The search knows the world only through a `WorldModel`: the simulator (the oracle) and the
 learned EM*D pathway both implement it, so the same search runs on either.
 """
@@ -61,6 +65,9 @@ class WorldModel(Protocol):
         cannot be carried out at all."""
 
 
+GUIDED_BUDGET = 2_000  # states a guided search grows unless told otherwise
+
+
 @dataclass(frozen=True)
 class SearchConfig:
     """How the tree is grown and the plan chosen."""
@@ -76,6 +83,13 @@ class SearchConfig:
     # The most states a tree may hold: a depth expected to pass it is refused before it is
     # grown (TreeTooLarge says by how much). The paper's tasks need at most ~700. None: no limit.
     max_nodes: int | None = 20_000
+    # How the tree grows (planning/guided.py): "breadth" (the paper's), "beam" or "best-first".
+    strategy: str = "breadth"
+    beam_width: int = 16  # beam: the nodes of each depth kept for expansion
+    # The most states grown: None gives the guided strategies GUIDED_BUDGET and breadth-first
+    # no limit; set, it also cuts breadth-first short (to compare strategies on one budget).
+    budget: int | None = None
+    pop: int = 8  # best-first: the best open nodes expanded together (one batch for the nets)
 
 
 class TreeTooLarge(ValueError):
@@ -89,7 +103,7 @@ class SearchResult:
     seconds: float
     expanded: int  # nodes whose affordances were recognised
     per_depth: list[int] = field(default_factory=list)  # nodes at each depth
-    truncated: bool = False  # the time limit stopped the tree before max_steps
+    truncated: bool = False  # the time limit (or breadth-first's budget) stopped the tree early
 
     @property
     def plan(self) -> tuple[Affordance, ...]:
@@ -125,75 +139,106 @@ def edges(recognised: Recognised, merge_radius: float) -> list[Affordance]:
     return parametrise([a for a, _ in kept])
 
 
+class Growth:
+    """A tree being grown: the nodes so far and the two batched steps every strategy uses."""
+
+    def __init__(self, model: WorldModel, goal: Goal, config: SearchConfig):
+        self.model, self.goal, self.config = model, goal, config
+        self.start = time.perf_counter()
+        image, state = model.root()
+        self.nodes = [Node((), image, state)]
+        self.nodes[0].loss = float(goal.loss(image[None])[0])
+        self.expanded = 0
+        self.truncated = False  # the time limit stopped a step
+
+    def room(self) -> int:
+        """States the budget still allows (the root is not counted)."""
+        budget = GUIDED_BUDGET if self.config.budget is None else self.config.budget
+        return budget - (len(self.nodes) - 1)
+
+    def out_of_time(self) -> bool:
+        limit = self.config.time_limit
+        return limit is not None and time.perf_counter() - self.start > limit
+
+    def recognise(self, frontier: list[int], desc: str | None) -> list[tuple[int, Affordance]]:
+        """The edges out of each node of `frontier`: (parent index, affordance). `desc`: the
+        progress bar's label (None: no bar)."""
+        children: list[tuple[int, Affordance]] = []
+        bs = self.config.batch_size
+        quiet = desc is None or not self.config.progress
+        with tqdm(total=len(frontier), desc=desc, disable=quiet, leave=False) as bar:
+            for b in range(0, len(frontier), bs):
+                if self.out_of_time():
+                    self.truncated = True
+                    break
+                batch = frontier[b : b + bs]
+                for i, rec in zip(batch, self.model.recognise([self.nodes[i] for i in batch]), strict=True):
+                    children.extend((i, a) for a in edges(rec, self.config.merge_radius))
+                self.expanded += len(batch)
+                bar.update(len(batch))
+        return children
+
+    def predict(self, children: list[tuple[int, Affordance]], desc: str | None) -> list[int]:
+        """Each child state predicted and scored by eq. (5); the indices of the new nodes."""
+        made_here: list[int] = []
+        bs, nodes = self.config.batch_size, self.nodes
+        with tqdm(total=len(children), desc=desc, disable=desc is None or not self.config.progress) as bar:
+            for b in range(0, len(children), bs):
+                if self.out_of_time():
+                    self.truncated = True
+                    break
+                batch = children[b : b + bs]
+                made = self.model.predict([nodes[i] for i, _ in batch], [a for _, a in batch])
+                new = [
+                    Node(nodes[i].plan + (a,), out[0], out[1], parent=i)
+                    for (i, a), out in zip(batch, made, strict=True)
+                    if out is not None
+                ]
+                if new:
+                    losses = self.goal.loss(np.stack([n.image for n in new]))
+                    for n, loss in zip(new, losses, strict=True):
+                        n.loss = float(loss)
+                        made_here.append(len(nodes))
+                        nodes.append(n)
+                bar.update(len(batch))
+        return made_here
+
+    def result(self, per_depth: list[int]) -> SearchResult:
+        best = choose(self.nodes, self.goal, self.config.tie_tolerance)
+        seconds = time.perf_counter() - self.start
+        return SearchResult(self.nodes, best, seconds, self.expanded, per_depth, self.truncated)
+
+
 def search(
     model: WorldModel, goal: Goal, max_steps: int, config: SearchConfig = SearchConfig()
 ) -> SearchResult:
-    """Grow the tree breadth-first to `max_steps` and pick the plan for `goal`."""
-    start = time.perf_counter()
-    image, state = model.root()
-    nodes = [Node((), image, state)]
-    nodes[0].loss = float(goal.loss(image[None])[0])
-    frontier = [0]
-    expanded = 0
-    per_depth = [1]
-    bs = config.batch_size
-    truncated = False
+    """Grow a tree to at most `max_steps` by `config.strategy` and pick the plan for `goal`."""
+    from afford.planning.guided import STRATEGIES  # they build on this module's Growth
 
-    def out_of_time() -> bool:
-        return config.time_limit is not None and time.perf_counter() - start > config.time_limit
+    if config.strategy not in STRATEGIES:
+        raise ValueError(f"unknown search {config.strategy!r}; expected one of {', '.join(STRATEGIES)}")
+    return STRATEGIES[config.strategy](Growth(model, goal, config), max_steps)
 
+
+def breadth_first(tree: Growth, max_steps: int) -> SearchResult:
+    """The paper's search: every node of a depth expanded before the next depth."""
+    config = tree.config
+    frontier, per_depth = [0], [1]
     for depth in range(max_steps):
         if config.max_nodes is not None and depth > 0:
             # Before recognising: the last level's branching factor, carried one level on.
             branching = per_depth[-1] / max(per_depth[-2], 1)
-            _refuse(depth, len(nodes), len(frontier) * branching, config.max_nodes, "about ")
-        children: list[tuple[int, Affordance]] = []
-        bar = tqdm(
-            total=len(frontier),
-            desc=f"depth {depth + 1}/{max_steps}: recognise",
-            disable=not config.progress,
-            leave=False,
-        )
-        for b in range(0, len(frontier), bs):
-            if out_of_time():
-                truncated = True
-                break
-            batch = frontier[b : b + bs]
-            for i, rec in zip(batch, model.recognise([nodes[i] for i in batch]), strict=True):
-                children.extend((i, a) for a in edges(rec, config.merge_radius))
-            expanded += len(batch)
-            bar.update(len(batch))
-        bar.close()
+            _refuse(depth, len(tree.nodes), len(frontier) * branching, config.max_nodes, "about ")
+        children = tree.recognise(frontier, f"depth {depth + 1}/{max_steps}: recognise")
         if config.max_nodes is not None:
-            _refuse(depth, len(nodes), len(children), config.max_nodes, "")  # now exact
-        frontier = []
-        bar = tqdm(
-            total=len(children), desc=f"depth {depth + 1}/{max_steps}: predict", disable=not config.progress
-        )
-        for b in range(0, len(children), bs):
-            if out_of_time():
-                truncated = True
-                break
-            batch = children[b : b + bs]
-            made = model.predict([nodes[i] for i, _ in batch], [a for _, a in batch])
-            new = [
-                Node(nodes[i].plan + (a,), out[0], out[1], parent=i)
-                for (i, a), out in zip(batch, made, strict=True)
-                if out is not None
-            ]
-            if new:
-                losses = goal.loss(np.stack([n.image for n in new]))
-                for n, loss in zip(new, losses, strict=True):
-                    n.loss = float(loss)
-                    frontier.append(len(nodes))
-                    nodes.append(n)
-            bar.update(len(batch))
-        bar.close()
+            _refuse(depth, len(tree.nodes), len(children), config.max_nodes, "")  # now exact
+        if config.budget is not None and len(children) > tree.room():
+            children, tree.truncated = children[: tree.room()], True
+        frontier = tree.predict(children, f"depth {depth + 1}/{max_steps}: predict")
         per_depth.append(len(frontier))
-        if not frontier or truncated:
+        if not frontier or tree.truncated:
             break
-    best = choose(nodes, goal, config.tie_tolerance)
-    return SearchResult(nodes, best, time.perf_counter() - start, expanded, per_depth, truncated)
+    return tree.result(per_depth)
 
 
 def _refuse(depth: int, have: int, adds: float, limit: int, about: str) -> None:

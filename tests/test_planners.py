@@ -117,6 +117,13 @@ def test_random_tasks_are_not_solved_by_doing_nothing(scene):
         assert execute_plan(scene, task.scene, (), task.success).success is False
 
 
+def test_long_random_tasks_hold_at_least_min_steps_executions(scene):
+    from afford.planning.random_tasks import random_task
+
+    made = [t for t in (random_task(scene, seed, max_steps=6, min_steps=5) for seed in range(3)) if t]
+    assert made and all(5 <= t.max_steps <= 6 for t in made)
+
+
 def test_symbolic_baseline_is_judged_by_all_its_equally_short_plans(scene):
     # Task 4 (ball first, then cup): canonically the two orders are equally short, and only one
     # keeps the block balanced. The baseline is judged by both, whatever the scan order.

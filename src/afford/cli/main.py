@@ -109,17 +109,15 @@ def _outcome_line(o) -> str:
 
 def cmd_plan(args) -> int:
     """Plan a task file, execute the plan in the simulator, draw it (paper Fig. 8)."""
-    from afford.planning.run import solve
+    from afford.planning.run import USES_NETS, solve
     from afford.planning.tasks import load_task
-    from afford.planning.tree import SearchConfig
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
 
     scene = Scene()
     task = load_task(args.task, scene)
-    learned = _learned(args) if args.planner == "learned" else None
-    config = SearchConfig(progress=not args.json, max_nodes=args.max_nodes or None)
-    outcome = solve(task, args.planner, scene, config, learned)
+    learned = _learned(args) if args.planner in USES_NETS else None
+    outcome = solve(task, args.planner, scene, _search_config(args, progress=not args.json), learned)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     picture = out / f"{task.name}-{args.planner}.png"
@@ -141,9 +139,8 @@ def cmd_plan(args) -> int:
 
 def cmd_bench_tasks(args) -> int:
     """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
-    from afford.planning.run import PLANNERS, solve
+    from afford.planning.run import PLANNERS, USES_NETS, solve
     from afford.planning.tasks import load_task
-    from afford.planning.tree import SearchConfig
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
 
@@ -151,7 +148,8 @@ def cmd_bench_tasks(args) -> int:
     if not files:
         raise CLIError(f"{args.tasks}: no task files (*.json) there")
     planners = PLANNERS if args.planner == "all" else (args.planner,)
-    learned = _learned(args) if "learned" in planners else None
+    learned = _learned(args) if any(p in USES_NETS for p in planners) else None
+    config = _search_config(args, progress=False)
     scene = Scene()
     report = {}
     for planner in planners:
@@ -161,9 +159,7 @@ def cmd_bench_tasks(args) -> int:
             live = not args.json and sys.stdout.isatty()
             if live:
                 print(f"{task.name} ...", end="", flush=True)
-            o = solve(
-                task, planner, scene, SearchConfig(progress=False, max_nodes=args.max_nodes or None), learned
-            )
+            o = solve(task, planner, scene, config, learned)
             if args.out:
                 plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
             rows.append(o.to_dict())
@@ -192,7 +188,7 @@ def cmd_bench_random(args) -> int:
     from tqdm import tqdm
 
     from afford.planning.random_bench import BenchSpec, run, summarise
-    from afford.planning.run import PLANNERS
+    from afford.planning.run import PLANNERS, USES_NETS
 
     if args.n < 1:
         raise CLIError("--n must be at least 1")
@@ -200,11 +196,21 @@ def cmd_bench_random(args) -> int:
         raise CLIError("--workers must be at least 1")
     if args.time_limit is not None and args.time_limit <= 0:
         raise CLIError("--time-limit must be positive (seconds)")
+    if not 1 <= args.min_steps <= args.max_steps:
+        raise CLIError("--min-steps must be at least 1 and at most --max-steps")
     planners = PLANNERS if args.planner == "all" else (args.planner,)
-    if "learned" in planners:
+    if any(p in USES_NETS for p in planners):
         _learned(args)  # a missing weights folder is one line here, not a worker's traceback
     threads = max(1, (os.cpu_count() or 1) // args.workers)
-    spec = BenchSpec(args.max_steps, planners, args.weights, args.time_limit, threads)
+    spec = BenchSpec(
+        args.max_steps,
+        planners,
+        args.weights,
+        args.time_limit,
+        threads,
+        args.min_steps,
+        _search_config(args, progress=False),
+    )
     rows = []
     with tqdm(total=args.n, desc="bench random", unit="task", disable=args.json) as bar:
         for row in run(spec, args.n, args.seed, args.workers):
@@ -214,7 +220,14 @@ def cmd_bench_random(args) -> int:
     if args.out:
         out = Path(args.out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        record = {"n": len(rows), "first_seed": args.seed, "max_steps": args.max_steps, "summary": summary}
+        record = {
+            "n": len(rows),
+            "first_seed": args.seed,
+            "min_steps": args.min_steps,
+            "max_steps": args.max_steps,
+            "search": args.search,
+            "summary": summary,
+        }
         out.write_text(json.dumps(record | {"tasks": rows}, indent=2) + "\n")
     if args.json:
         print(
@@ -227,7 +240,8 @@ def cmd_bench_random(args) -> int:
         ratio = f"; {s['of_oracle']:.2f} x oracle" if "of_oracle" in s else ""
         print(
             f"{p:9s} {s['success']:.2f} [{s['ci95'][0]:.2f}, {s['ci95'][1]:.2f}] success over {len(rows)} "
-            f"random tasks of up to {args.max_steps} steps ({s['seconds']:.1f} s planning each{cut}){ratio}"
+            f"random tasks of {args.min_steps}-{args.max_steps} steps ({s['seconds']:.1f} s planning and "
+            f"{s['nodes']:.0f} states each{cut}){ratio}"
         )
     return 0
 
@@ -271,6 +285,55 @@ def _learned(args):
         raise CLIError(str(e)) from None
 
 
+def _add_search_arguments(parser, max_nodes: bool = True) -> None:
+    """How the tree grows: the paper's breadth-first search, or a guided one (paper V)."""
+    from afford.planning.guided import STRATEGIES
+    from afford.planning.tree import GUIDED_BUDGET, SearchConfig
+
+    parser.add_argument(
+        "--search",
+        choices=tuple(STRATEGIES),
+        default="breadth",
+        help="breadth: every branch, the paper's (default); beam: per depth the --beam-width states "
+        "closest to the goal (eq. 5) are expanded; best-first: the closest open states of any depth "
+        "first. Hybrid planners search this way when the world model rejects every canonical plan",
+    )
+    parser.add_argument(
+        "--beam-width",
+        type=int,
+        default=SearchConfig.beam_width,
+        metavar="K",
+        help="beam: states kept per depth",
+    )
+    parser.add_argument(
+        "--budget",
+        type=int,
+        metavar="N",
+        help=f"the most states grown (default: {GUIDED_BUDGET:,} for beam and best-first, none for breadth)",
+    )
+    if max_nodes:
+        parser.add_argument(
+            "--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP
+        )
+
+
+def _search_config(args, progress: bool):
+    from afford.planning.tree import SearchConfig
+
+    if args.beam_width < 1:
+        raise CLIError("--beam-width must be at least 1")
+    if args.budget is not None and args.budget < 1:
+        raise CLIError("--budget must be at least 1 state")
+    max_nodes = getattr(args, "max_nodes", SearchConfig.max_nodes)
+    return SearchConfig(
+        progress=progress,
+        max_nodes=max_nodes or None,
+        strategy=args.search,
+        beam_width=args.beam_width,
+        budget=args.budget,
+    )
+
+
 MAX_NODES_HELP = (
     "refuse to grow a tree past this many states, with the estimate, before growing the depth that "
     "would pass it (default 20,000; 0: no limit; the paper's tasks need at most ~700)"
@@ -311,7 +374,6 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=cmd_demo)
 
     from afford.planning.run import PLANNERS
-    from afford.planning.tree import SearchConfig
 
     pl = sub.add_parser(
         "plan",
@@ -320,14 +382,15 @@ def build_parser() -> argparse.ArgumentParser:
         "execute the plan in the simulator and check the task's success predicate. Planners: oracle (the "
         "simulator as a perfect world model, paper II.D search), symbolic (canonical effects only, "
         "breadth-first), learned (the paper's method: the same search with the trained recognition and "
-        "prediction nets). Writes a picture like the paper's Fig. 8 and a JSON record. Exit status 1 when "
-        "the executed plan misses the goal.",
+        "prediction nets), hybrid (paper V: the symbolic planner's canonical plans, each checked by the "
+        "learned nets against the goal; the search when all are rejected), hybrid-oracle (the same, "
+        "checked by the simulator). Writes a picture like the paper's Fig. 8 and a JSON record. Exit "
+        "status 1 when the executed plan misses the goal.",
     )
     pl.add_argument("--task", required=True, metavar="TASK.json")
     pl.add_argument("--planner", choices=PLANNERS, default="oracle")
     pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
     pl.add_argument("--json", action="store_true", help="print the record as JSON")
-    pl.add_argument("--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP)
     pl.add_argument(
         "--weights",
         "--run-dir",
@@ -335,6 +398,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="learned planner: a folder with recognition.safetensors and prediction.safetensors, or with "
         "recognition/ and prediction/ training runs (default: the weights shipped in the package)",
     )
+    _add_search_arguments(pl)
     pl.set_defaults(func=cmd_plan)
 
     b = sub.add_parser("bench", help="benchmarks", description="Benchmarks over a set of tasks.")
@@ -352,7 +416,7 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")
-    bt.add_argument("--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP)
+    _add_search_arguments(bt)
     bt.set_defaults(func=cmd_bench_tasks)
 
     br = bsub.add_parser(
@@ -366,6 +430,7 @@ def build_parser() -> argparse.ArgumentParser:
     br.add_argument("--n", type=int, default=50, help="number of tasks (default 50)")
     br.add_argument("--seed", type=int, default=0)
     br.add_argument("--max-steps", type=int, default=4)
+    br.add_argument("--min-steps", type=int, default=1, help="fewest random executions a goal is made of")
     br.add_argument("--planner", choices=(*PLANNERS, "all"), default="all")
     br.add_argument(
         "--weights", "--run-dir", metavar="DIR", help="learned planner's weights (see afford plan)"
@@ -386,6 +451,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     br.add_argument("--out", metavar="FILE.json", help="also write the summary and every task's row here")
     br.add_argument("--json", action="store_true")
+    _add_search_arguments(br, max_nodes=False)
     br.set_defaults(func=cmd_bench_random)
 
     dg = sub.add_parser(

@@ -13,9 +13,11 @@ import math
 import multiprocessing as mp
 from collections import deque
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from afford.planning.tree import SearchConfig
 
 Z95 = 1.959964  # two-sided 95% normal quantile
 ORACLE_BATCH = 8  # the oracle's predict batch: small, so its time limit is checked often
@@ -28,6 +30,8 @@ class BenchSpec:
     weights: str | None = None  # the learned planner's weights folder (None: shipped)
     time_limit: float | None = 60.0  # seconds of tree search per task and planner
     threads: int = 1  # torch threads per worker
+    min_steps: int = 1
+    search: SearchConfig = field(default_factory=lambda: SearchConfig(progress=False))  # strategy, budget
 
 
 def wilson(successes: float, n: int) -> tuple[float, float]:
@@ -49,12 +53,13 @@ _state: dict = {}
 def _init(spec: BenchSpec) -> None:
     import torch
 
+    from afford.planning.run import USES_NETS
     from afford.sim.scene import Scene
 
     torch.set_num_threads(spec.threads)
     _state["spec"] = spec
     _state["scene"] = Scene()
-    if "learned" in spec.planners:
+    if any(p in USES_NETS for p in spec.planners):
         from afford.planning.learned import load_learned
 
         _state["learned"] = load_learned(spec.weights)
@@ -65,17 +70,16 @@ def run_seed(seed: int) -> dict | None:
     the seed makes no task."""
     from afford.planning.random_tasks import random_task
     from afford.planning.run import solve
-    from afford.planning.tree import SearchConfig
 
     spec: BenchSpec = _state["spec"]
     scene = _state["scene"]
-    task = random_task(scene, seed, spec.max_steps)
+    task = random_task(scene, seed, spec.max_steps, spec.min_steps)
     if task is None:
         return None
     row: dict = {"task": task.name, "seed": seed, "steps": task.max_steps}
     for planner in spec.planners:
-        batch = ORACLE_BATCH if planner == "oracle" else SearchConfig.batch_size
-        config = SearchConfig(progress=False, time_limit=spec.time_limit, batch_size=batch)
+        batch = ORACLE_BATCH if planner.endswith("oracle") else spec.search.batch_size
+        config = replace(spec.search, progress=False, time_limit=spec.time_limit, batch_size=batch)
         o = solve(task, planner, scene, config, _state.get("learned"))
         row[planner] = {
             "solved": o.success,
@@ -83,7 +87,8 @@ def run_seed(seed: int) -> dict | None:
             "plan_length": len(o.plan or ()),
             "seconds": round(o.seconds, 2),
             "truncated": o.truncated,
-        }
+            "nodes": o.nodes,
+        } | ({"source": o.source} if o.source else {})
     return row
 
 
@@ -127,7 +132,11 @@ def summarise(rows: list[dict], planners: tuple[str, ...]) -> dict:
             "ci95": [round(lo, 4), round(hi, 4)],
             "seconds": round(float(np.mean([r[p]["seconds"] for r in rows])), 2),
             "truncated": int(sum(r[p]["truncated"] for r in rows)),
+            "nodes": round(float(np.mean([r[p].get("nodes", 0) for r in rows])), 1),
         }
+        sources = [r[p]["source"] for r in rows if "source" in r[p]]
+        if sources:
+            out[p]["from_symbolic"] = sources.count("symbolic")
     if "learned" in planners and "oracle" in planners and out["oracle"]["success"] > 0:
         out["learned"]["of_oracle"] = round(out["learned"]["success"] / out["oracle"]["success"], 4)
     return out

@@ -1,6 +1,6 @@
 """Random planning tasks that nobody tuned by hand (`afford bench random`).
 
-A random scene, 1-4 random affordances executed in it (as in the dataset), and the goal is a
+A random scene, 1-4 (or min-max) random affordances executed in it (as in the dataset), and the goal is a
 crop of the final image around what changed (positive, RGBD). Success is judged on true
 poses: after the plan, every object is within TOLERANCE of where it was in the goal state
 (the held object held, fallen objects gone).
@@ -66,15 +66,16 @@ def changed_crop(start: np.ndarray, final: np.ndarray) -> tuple[int, int, int, i
     return tuple(box)
 
 
-def random_task(scene: Scene, seed: int, max_steps: int = 4) -> Task | None:
-    """Task `seed`: None when its random execution changed nothing visible, or left every
-    object within the success tolerance of its start."""
+def random_task(scene: Scene, seed: int, max_steps: int = 4, min_steps: int = 1) -> Task | None:
+    """Task `seed`, the state after `min_steps` to `max_steps` random executions: None when
+    fewer could be carried out, or they changed nothing visible, or left every object within
+    the success tolerance of its start."""
     rng = np.random.default_rng([seed, 7])
     specs = random_layout(rng)
     scene.reset(specs, check=False)  # free of overlaps by construction
     specs = scene.specs()  # settled
     start = scene.observe()
-    steps = int(rng.integers(1, max_steps + 1))
+    steps = int(rng.integers(min_steps, max_steps + 1))
     done = 0
     for _ in range(steps):
         candidates = parametrise(scene.affordances())
@@ -88,7 +89,7 @@ def random_task(scene: Scene, seed: int, max_steps: int = 4) -> Task | None:
         else:
             break
     final = scene.observe()
-    if done == 0 or not (np.abs(final - start).max(-1) > CHANGED).any():
+    if done == 0 or done < min_steps or not (np.abs(final - start).max(-1) > CHANGED).any():
         return None
     r0, r1, c0, c1 = changed_crop(start, final)
     names = set(object_names(specs))

@@ -10,11 +10,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from afford.planning.hybrid import PROPOSALS, plan_hybrid
 from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel, execute_plan
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
-from afford.planning.tree import SearchConfig, search
+from afford.planning.tree import SearchConfig, SearchResult, search
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
 from afford.sim.scene import Scene
@@ -41,6 +42,7 @@ class Outcome:
     tried: int = 0
     total: int = 0
     truncated: bool = False  # the search's time limit stopped the tree early
+    source: str = ""  # hybrid only: "symbolic" (a checked canonical plan) or "fallback" (the search)
 
     def to_dict(self) -> dict:
         fair = {}
@@ -64,6 +66,7 @@ class Outcome:
                 "reason": self.reason,
             }
             | ({"truncated": True} if self.truncated else {})
+            | ({"source": self.source} if self.source else {})
         )
 
 
@@ -94,9 +97,42 @@ def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcom
     return _solve_symbolic(task, scene)
 
 
+def _hybrid(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    if learned is None:
+        from afford.planning.learned import load_learned
+
+        learned = load_learned()
+    return _solve_hybrid(task, "hybrid", lambda start: LearnedModel(start, *learned), scene, config)
+
+
+def _hybrid_oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    return _solve_hybrid(task, "hybrid-oracle", lambda start: OracleModel(scene), scene, config)
+
+
 def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConfig) -> Outcome:
     """Tree search (paper II.D) on a world model, then the plan executed in the simulator."""
-    result = search(model, task.goal, task.max_steps, config)
+    return _judge(task, name, search(model, task.goal, task.max_steps, config), scene)
+
+
+def _solve_hybrid(task: Task, name: str, make_model, scene: Scene, config: SearchConfig) -> Outcome:
+    """Canonical proposals checked by a world model, search as the fallback (`hybrid.py`).
+    `make_model(start image)` builds the world model on the scene reset to the task's start."""
+    proposals = plan_symbolic(
+        scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
+    )
+    scene.reset(task.scene)
+    hybrid = plan_hybrid(make_model(scene.observe()), task.goal, proposals.plans, task.max_steps, config)
+    outcome = _judge(task, name, hybrid.search, scene, source=hybrid.source)
+    outcome.seconds += proposals.seconds
+    outcome.nodes += proposals.expanded
+    if hybrid.source == "fallback" and hybrid.proposals:
+        note = f"the world model rejected all {hybrid.proposals} canonical plans; searched instead"
+        outcome.reason = "; ".join(r for r in (outcome.reason, note) if r)
+    return outcome
+
+
+def _judge(task: Task, name: str, result: SearchResult, scene: Scene, source: str = "") -> Outcome:
+    """The planned plan executed open-loop in the simulator and judged by the task's predicate."""
     planned = [n.image for n in result.path()]
     ex = execute_plan(scene, task.scene, result.plan, task.success)
     reason = (
@@ -115,6 +151,7 @@ def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConf
         reason,
         ex.executed,
         truncated=result.truncated,
+        source=source,
     )
 
 
@@ -186,5 +223,12 @@ def _deviation(scene: Scene, predicted, names: list[str]) -> str:
 
 
 # Each planner: (task, scene, search config, learned nets or None) -> Outcome.
-PLANNER_REGISTRY = {"oracle": _oracle, "symbolic": _symbolic, "learned": _learned}
+PLANNER_REGISTRY = {
+    "oracle": _oracle,
+    "symbolic": _symbolic,
+    "learned": _learned,
+    "hybrid": _hybrid,  # canonical proposals checked by the learned nets (paper V)
+    "hybrid-oracle": _hybrid_oracle,  # the same, checked by the simulator
+}
 PLANNERS = tuple(PLANNER_REGISTRY)
+USES_NETS = ("learned", "hybrid")  # the planners that load the trained nets

@@ -139,7 +139,7 @@ def cmd_plan(args) -> int:
 
 def cmd_bench_tasks(args) -> int:
     """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
-    from afford.planning.run import PLANNERS, USES_NETS, solve
+    from afford.planning.run import USES_NETS, solve
     from afford.planning.tasks import load_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
@@ -147,7 +147,7 @@ def cmd_bench_tasks(args) -> int:
     files = sorted(Path(args.tasks).glob("*.json"))
     if not files:
         raise CLIError(f"{args.tasks}: no task files (*.json) there")
-    planners = PLANNERS if args.planner == "all" else (args.planner,)
+    planners = _planners(args.planner)
     learned = _learned(args) if any(p in USES_NETS for p in planners) else None
     config = _search_config(args, progress=False)
     scene = Scene()
@@ -188,7 +188,7 @@ def cmd_bench_random(args) -> int:
     from tqdm import tqdm
 
     from afford.planning.random_bench import BenchSpec, run, summarise
-    from afford.planning.run import PLANNERS, USES_NETS
+    from afford.planning.run import USES_NETS
 
     if args.n < 1:
         raise CLIError("--n must be at least 1")
@@ -198,7 +198,7 @@ def cmd_bench_random(args) -> int:
         raise CLIError("--time-limit must be positive (seconds)")
     if not 1 <= args.min_steps <= args.max_steps:
         raise CLIError("--min-steps must be at least 1 and at most --max-steps")
-    planners = PLANNERS if args.planner == "all" else (args.planner,)
+    planners = _planners(args.planner)
     if any(p in USES_NETS for p in planners):
         _learned(args)  # a missing weights folder is one line here, not a worker's traceback
     threads = max(1, (os.cpu_count() or 1) // args.workers)
@@ -285,6 +285,20 @@ def _learned(args):
         raise CLIError(str(e)) from None
 
 
+def _planners(given: str) -> tuple[str, ...]:
+    from afford.planning.run import PLANNERS
+
+    if given == "all":
+        return PLANNERS
+    names = tuple(n.strip() for n in given.split(","))
+    unknown = [n for n in names if n not in PLANNERS]
+    if unknown:
+        raise CLIError(
+            f"unknown planner {unknown[0]!r}; expected {', '.join(PLANNERS)} or all, or a comma list"
+        )
+    return names
+
+
 def _add_search_arguments(parser, max_nodes: bool = True) -> None:
     """How the tree grows: the paper's breadth-first search, or a guided one (paper V)."""
     from afford.planning.guided import STRATEGIES
@@ -334,6 +348,9 @@ def _search_config(args, progress: bool):
     )
 
 
+PLANNERS_HELP = (
+    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle), several as a comma list, or all"
+)
 MAX_NODES_HELP = (
     "refuse to grow a tree past this many states, with the estimate, before growing the depth that "
     "would pass it (default 20,000; 0: no limit; the paper's tasks need at most ~700)"
@@ -409,7 +426,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Plan every task file in a folder with one planner, execute each plan, and print "
         "solved / plan / plan length / nodes / planning seconds per task.",
     )
-    bt.add_argument("--planner", choices=(*PLANNERS, "all"), default="oracle")
+    bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
     bt.add_argument(
         "--weights", "--run-dir", metavar="DIR", help="learned planner's weights (see afford plan)"
     )
@@ -431,7 +448,7 @@ def build_parser() -> argparse.ArgumentParser:
     br.add_argument("--seed", type=int, default=0)
     br.add_argument("--max-steps", type=int, default=4)
     br.add_argument("--min-steps", type=int, default=1, help="fewest random executions a goal is made of")
-    br.add_argument("--planner", choices=(*PLANNERS, "all"), default="all")
+    br.add_argument("--planner", default="all", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
     br.add_argument(
         "--weights", "--run-dir", metavar="DIR", help="learned planner's weights (see afford plan)"
     )

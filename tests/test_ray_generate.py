@@ -30,16 +30,26 @@ def test_ray_on_a_local_instance_writes_the_same_shards_as_local_workers(small_d
     assert ours.keys() == theirs.keys() and ours == theirs
 
 
-def _ray_shard_workers() -> list[int]:
-    """Pids of Ray worker processes running a shard now (Ray names them after the task)."""
+def _parent(pid: int) -> int:
+    return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+
+
+def _ray_shard_workers(ancestor: int) -> list[int]:
+    """Pids of Ray worker processes running a shard now (Ray names them after the task) that
+    descend from `ancestor` (a local instance's processes are its driver's children), so a
+    test running beside this one keeps its workers."""
     pids = []
     for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                if (entry / "cmdline").read_bytes().startswith(b"ray::make_shard"):
-                    pids.append(int(entry.name))
-            except OSError:
-                pass
+        try:
+            if not (entry.name.isdigit() and (entry / "cmdline").read_bytes().startswith(b"ray::make_shard")):
+                continue
+            pid = int(entry.name)
+            while pid > 1 and pid != ancestor:
+                pid = _parent(pid)
+            if pid == ancestor:
+                pids.append(int(entry.name))
+        except (OSError, ValueError, IndexError):
+            pass
     return pids
 
 
@@ -53,7 +63,7 @@ def test_a_ray_worker_killed_mid_run_still_gives_every_sequence(tmp_path):
     killed, deadline = None, time.monotonic() + 120
     try:
         while killed is None and job.poll() is None and time.monotonic() < deadline:
-            workers = _ray_shard_workers()
+            workers = _ray_shard_workers(job.pid)
             if workers:
                 killed = workers[0]
                 os.kill(killed, signal.SIGKILL)

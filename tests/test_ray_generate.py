@@ -10,14 +10,17 @@ from pathlib import Path
 import pytest
 from conftest import SMALL_SEQUENCES, SMALL_SHARD
 
-ray = pytest.importorskip("ray", reason="the cluster extra: pip install 'afford[cluster]'")
+
+@pytest.fixture
+def ray():
+    return pytest.importorskip("ray", reason="the cluster extra: pip install 'afford[cluster]'")
 
 
 def _shard_bytes(root: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted((root / "shards").glob("*.npz"))}
 
 
-def test_ray_on_a_local_instance_writes_the_same_shards_as_local_workers(small_dataset, tmp_path):
+def test_ray_on_a_local_instance_writes_the_same_shards_as_local_workers(ray, small_dataset, tmp_path):
     from afford.data.generate import GenerateConfig, generate
 
     config = GenerateConfig(
@@ -53,7 +56,7 @@ def _ray_shard_workers(ancestor: int) -> list[int]:
     return pids
 
 
-def test_a_ray_worker_killed_mid_run_still_gives_every_sequence(tmp_path):
+def test_a_ray_worker_killed_mid_run_still_gives_every_sequence(ray, tmp_path):
     from afford.data.format import Dataset, read_manifest, shard_status
 
     out, sequences = tmp_path / "data", 8
@@ -92,3 +95,15 @@ def test_the_core_install_never_imports_ray(tmp_path):
         "assert 'ray' not in sys.modules\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_without_ray_the_ray_executor_says_how_to_get_it(tmp_path):
+    code = (
+        "import sys\n"
+        "sys.modules['ray'] = None  # as if the cluster extra were not installed\n"
+        "from afford.cli.main import main\n"
+        f"sys.exit(main(['generate', '--out', {str(tmp_path / 'd')!r}, '--sequences', '1', '--ray']))\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 2 and "pip install 'afford[cluster]'" in r.stderr
+    assert "Traceback" not in r.stderr

@@ -54,7 +54,11 @@ def generate(out: Path, sequences: int, workers: int, ray: bool, kill: bool = Fa
     stdout, stderr = job.communicate()
     if job.returncode != 0:
         raise SystemExit(f"generate failed: {stderr[-2000:]}")
-    report = json.loads(stdout)
+    # Ray may write a line of its own (a worker that died) before the record.
+    start = stdout.find("{\n")
+    if start < 0:
+        raise SystemExit(f"generate printed no record: {stdout[-2000:]!r} {stderr[-2000:]!r}")
+    report = json.loads(stdout[start:])
     report["killed_worker"] = killed
     return report
 

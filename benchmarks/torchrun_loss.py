@@ -9,8 +9,8 @@ and at the same global batch: in one process; under `torchrun --standalone --npr
 checkpoint (at half the steps) and started again, which must resume. Prints the mean loss
 per window of batches for each and writes OUT/loss.png with the three curves. The two
 processes see other batches than the one (each rank its own slice and augmentations), so
-the curves agree within the noise of batch sampling, not exactly; for scale, the table also
-shows the spread between windows of the single run. Run it on an otherwise idle machine.
+the curves agree within the noise of batch sampling, not exactly; the resumed run repeats the
+other torchrun run exactly up to its checkpoint. Run it on an otherwise idle machine.
 """
 
 from __future__ import annotations

@@ -205,3 +205,16 @@ def test_checkpoint_errors(tmp_path):
     save_checkpoint(good, RecognitionNet(TINY), "recognition", asdict(TINY), 3)
     net, config, meta = load_net(good)
     assert meta["step"] == 3 and config == TINY
+
+
+def test_the_operating_point_is_the_best_recall_within_the_spurious_budget():
+    from afford.recognition.evaluate import SPURIOUS_BUDGET, operating_point
+
+    def row(th, recall, spurious, net):
+        return {"threshold": th, "recall": recall, "spurious_per_image": spurious, "net": net}
+
+    sweep = [row(0.4, 0.98, SPURIOUS_BUDGET + 0.03, 900), row(0.5, 0.97, SPURIOUS_BUDGET, 880)]
+    sweep.append(row(0.6, 0.95, SPURIOUS_BUDGET - 0.05, 860))
+    assert operating_point(sweep) == 0.5  # the most hits net of spurious would be 0.4
+    over = [row(0.4, 0.98, 0.5, 900), row(0.5, 0.97, 0.4, 910)]
+    assert operating_point(over) == 0.5  # nothing within the budget: the most net hits

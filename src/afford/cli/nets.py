@@ -34,7 +34,8 @@ def cmd_train(args) -> int:
         raise CLIError(str(e)) from None
     except KeyboardInterrupt:
         if is_main_process():
-            print(f"interrupted; the last checkpoint is in {args.out}: the same command continues it")
+            out = args.out
+            print(f"interrupted; the last checkpoint is in {out}: run the same command again to continue")
         return 130
     finally:
         leave_world()
@@ -144,7 +145,10 @@ def _check_run(run: str) -> None:
 
 
 def cmd_export(args) -> int:
-    """Ship a trained pair: weights only, float16, the tuned cut-off inside."""
+    """Ship a trained pair: weights only, the tuned cut-off inside. The prediction net goes in
+    float16 (half the size, the same predictions to the eye); the recognition net stays in
+    float32, since float16 moved detections across the cut-off (one of 797 on the train
+    states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
     from afford.planning.learned import PREDICTION_FILE, RECOGNITION_FILE
     from afford.recognition.infer import THRESHOLD_FILE
     from afford.training.checkpoint import export_weights
@@ -157,7 +161,7 @@ def cmd_export(args) -> int:
     out = Path(args.out)
     sizes = {
         RECOGNITION_FILE: export_weights(
-            rec_run / args.checkpoint, out / RECOGNITION_FILE, "recognition", extra=extra
+            rec_run / args.checkpoint, out / RECOGNITION_FILE, "recognition", half=False, extra=extra
         ),
         PREDICTION_FILE: export_weights(pred_run / args.checkpoint, out / PREDICTION_FILE, "prediction"),
     }
@@ -288,7 +292,8 @@ def add_parsers(sub) -> None:
         "export",
         help="write a trained recognition + prediction pair as shippable weights",
         description="Write the weights of a recognition run and a prediction run (no optimiser state, "
-        "float16, the recognition cut-off tuned by `afford eval recognition` inside) to a folder that "
+        "recognition in float32 and prediction in float16, the recognition cut-off tuned by `afford eval "
+        "recognition` inside) to a folder that "
         "`afford plan --planner learned --weights DIR` reads. The package ships such a folder.",
     )
     x.add_argument("--recognition", required=True, metavar="RUN")

@@ -50,3 +50,12 @@ def test_hybrid_oracle_plans_a_paper_task_from_a_checked_canonical_plan(scene):
     task = load_task(Path(__file__).parents[1] / "tasks/paper/01-order.json", scene)
     o = solve(task, "hybrid-oracle", scene, SearchConfig(progress=False))
     assert o.source == "symbolic" and o.success and len(o.plan) == 4
+
+
+def test_the_accept_share_sets_how_close_a_kept_proposal_must_come():
+    from dataclasses import replace
+
+    near = moves(2, 4, 6, 8, 10)  # 10 of the 12 cells: most of the way
+    loose = plan_hybrid(StepWorld(), Goal(bar(GOAL_CELL)), [near], 6, replace(QUIET, accept=0.5))
+    strict = plan_hybrid(StepWorld(), Goal(bar(GOAL_CELL)), [near], 6, replace(QUIET, accept=0.99))
+    assert loose.source == "symbolic" and strict.source == "fallback"

@@ -325,6 +325,14 @@ def _add_search_arguments(parser, max_nodes: bool = True) -> None:
         metavar="N",
         help=f"the most states grown (default: {GUIDED_BUDGET:,} for beam and best-first, none for breadth)",
     )
+    parser.add_argument(
+        "--accept",
+        type=float,
+        default=SearchConfig.accept,
+        metavar="SHARE",
+        help="hybrid planners: a canonical plan is kept when its predicted outcome removes at least this "
+        f"share of the start's goal loss, eq. 5 (default {SearchConfig.accept})",
+    )
     if max_nodes:
         parser.add_argument(
             "--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP
@@ -338,6 +346,8 @@ def _search_config(args, progress: bool):
         raise CLIError("--beam-width must be at least 1")
     if args.budget is not None and args.budget < 1:
         raise CLIError("--budget must be at least 1 state")
+    if not 0 < args.accept < 1:
+        raise CLIError("--accept must lie between 0 and 1")
     max_nodes = getattr(args, "max_nodes", SearchConfig.max_nodes)
     return SearchConfig(
         progress=progress,
@@ -345,6 +355,7 @@ def _search_config(args, progress: bool):
         strategy=args.search,
         beam_width=args.beam_width,
         budget=args.budget,
+        accept=args.accept,
     )
 
 

@@ -90,6 +90,9 @@ class SearchConfig:
     # no limit; set, it also cuts breadth-first short (to compare strategies on one budget).
     budget: int | None = None
     pop: int = 8  # best-first: the best open nodes expanded together (one batch for the nets)
+    # Hybrid planners (planning/hybrid.py): the share of the start's eq. (5) loss a canonical
+    # plan's predicted outcome must remove to be kept.
+    accept: float = 0.5
 
 
 class TreeTooLarge(ValueError):

@@ -169,6 +169,19 @@ def test_plan_cli_refuses_a_huge_tree_in_one_line(tmp_path, capsys):
     assert "would add" in r.stderr and "--max-nodes" in r.stderr
 
 
+def test_search_options_out_of_range_are_refused_in_one_line(capsys):
+    task = str(PAPER / "01-order.json")
+    for args, named in (
+        (("plan", "--task", task, "--search", "beam", "--beam-width", "0"), "--beam-width"),
+        (("plan", "--task", task, "--budget", "0"), "--budget"),
+        (("plan", "--task", task, "--planner", "hybrid", "--accept", "1.5"), "--accept"),
+        (("bench", "random", "--min-steps", "3", "--max-steps", "2"), "--min-steps"),
+        (("bench", "tasks", "--planner", "learned,psychic"), "psychic"),
+    ):
+        r = here(capsys, *args)
+        assert r.returncode == 2 and named in r.stderr and r.stderr.count("\n") == 1, args
+
+
 def test_bench_random_gives_the_same_tasks_and_results_on_two_workers():
     import torch
 

@@ -88,3 +88,30 @@ def test_a_torchrun_run_killed_mid_way_resumes_from_its_checkpoint(small_dataset
     assert json.loads(out)["steps"] == reached + 10
     steps = [json.loads(line)["step"] for line in (run / "log.jsonl").read_text().splitlines()]
     assert max(steps) == reached + 10
+
+
+def test_batches_and_targets_move_whole_to_the_device():
+    import torch
+
+    from afford.recognition.targets import Targets
+    from afford.training.distributed import to_device
+
+    t = Targets(*(torch.zeros(2, 3) for _ in range(4)))
+    moved = to_device((torch.ones(2), [torch.ones(1), torch.ones(3)], t, 7), "cpu")
+    assert isinstance(moved, tuple) and isinstance(moved[1], list) and isinstance(moved[2], Targets)
+    assert moved[3] == 7 and moved[2].reg_mask.shape == (2, 3)
+
+
+def test_a_gpu_asked_for_where_torch_sees_none_is_refused_in_one_line(small_dataset, tmp_path, capsys):
+    import torch
+
+    from afford.cli.main import main
+    from afford.training.distributed import resolve_device
+
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    assert resolve_device("auto") == "cpu" and resolve_device("cpu") == "cpu"
+    args = ["train", "recognition", "--data", str(small_dataset), "--preset", "tiny", "--out", str(tmp_path)]
+    assert main([*args, "--device", "cuda"]) == 2
+    err = capsys.readouterr().err
+    assert "--device cuda" in err and err.count("\n") == 1

@@ -29,7 +29,9 @@ def cmd_train(args) -> int:
         raise CLIError(str(e)) from None
     try:
         extra = {"predicted": args.predicted} if args.net == "recognition" else {}
-        state = train(args.data, config, args.out, progress=not args.json, init=args.init, **extra)
+        state = train(
+            args.data, config, args.out, progress=not args.json, init=args.init, device=args.device, **extra
+        )
     except DistributedError as e:
         raise CLIError(str(e)) from None
     except KeyboardInterrupt:
@@ -208,6 +210,13 @@ def add_parsers(sub) -> None:
             "--init",
             metavar="CHECKPOINT",
             help="start a new run from these weights (fine-tuning; same architecture)",
+        )
+        p.add_argument(
+            "--device",
+            choices=("auto", "cpu", "cuda"),
+            default="auto",
+            help="where to train: a GPU when torch sees one (auto, the default), or the CPU; under "
+            "torchrun each rank takes the GPU of its local rank",
         )
         p.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
         if net == "recognition":

@@ -39,7 +39,7 @@ def affordance_pixel(images: torch.Tensor, positions: torch.Tensor) -> torch.Ten
     px = world_to_pixel(positions).floor().long()
     col = px[:, 0].clamp(0, images.shape[-1] - 1)
     row = px[:, 1].clamp(0, images.shape[-2] - 1)
-    return images[torch.arange(len(images)), :, row, col]
+    return images[torch.arange(len(images), device=images.device), :, row, col]
 
 
 class PredictionNet(nn.Module):
@@ -118,11 +118,16 @@ class PredictionNet(nn.Module):
         padded steps of a batch cost nothing.
         """
         b, length = actions.shape[:2]
-        order = torch.arange(b) if steps is None else torch.argsort(steps, descending=True, stable=True)
-        active = (
-            torch.full((length,), b)
+        at = image.device
+        order = (
+            torch.arange(b, device=at)
             if steps is None
-            else (steps[order][None, :] > torch.arange(length)[:, None]).sum(1)
+            else torch.argsort(steps, descending=True, stable=True)
+        )
+        active = (
+            torch.full((length,), b, device=at)
+            if steps is None
+            else (steps[order][None, :] > torch.arange(length, device=at)[:, None]).sum(1)
         )
         image = image[order]
         acts = actions[order]

@@ -16,7 +16,14 @@ from afford.data.torch_data import PredictionData, collate_prediction, worker_in
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
-from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, wrap
+from afford.training.distributed import (
+    join_world,
+    loader_order,
+    rank_batch,
+    rank_threads,
+    to_device,
+    wrap,
+)
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
 
@@ -25,7 +32,7 @@ VAL_RUNS = 128  # validation runs per evaluation
 
 def step_mask(steps: torch.Tensor, longest: int) -> torch.Tensor:
     """(B, L) 1 for the steps each run really has, 0 for padding."""
-    return (torch.arange(longest)[None, :] < steps[:, None]).float()
+    return (torch.arange(longest, device=steps.device)[None, :] < steps[:, None]).float()
 
 
 def change_mask(images: torch.Tensor, predicted: torch.Tensor, repair: bool) -> torch.Tensor:
@@ -56,7 +63,7 @@ def sequence_loss(net: nn.Module, images: torch.Tensor, actions: torch.Tensor, s
     `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
     c = getattr(net, "module", net).config
-    with torch.autocast("cpu", dtype=torch.bfloat16, enabled=c.bf16):
+    with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
         predicted, differences = net(images[:, 0], actions, steps)
     predicted, differences = predicted.float(), differences.float()
     truth = images[:, 1:]
@@ -89,11 +96,13 @@ def train(
     run_dir: str | Path,
     progress: bool = True,
     init: str | Path | None = None,
+    device: str = "auto",
 ) -> LoopState:
     """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
     another checkpoint's weights (fine-tuning), which must have the same architecture. Under
-    torchrun, one rank of a DistributedDataParallel run (`training/distributed.py`)."""
-    world = join_world()
+    torchrun, one rank of a DistributedDataParallel run; `device`: auto, cpu or cuda
+    (`training/distributed.py`)."""
+    world = join_world(device)
     torch.set_num_threads(rank_threads(config.threads, world))
     torch.manual_seed(world.rank)  # each rank its own random stream; rank 0 is a lone run's
     data = Dataset(data_dir)
@@ -107,7 +116,7 @@ def train(
     train_set = PredictionData(data, "train", config.max_steps, augment, seed=world.rank)
     val_set = PredictionData(data, "val", config.max_steps, random_start=False)
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
-    val_batch = collate_prediction([val_set[int(i)] for i in picks])
+    val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)
     # Batches are built in a background process (decoding, augmenting, padding), so the
     # training threads never wait for them.
     workers = (
@@ -128,12 +137,12 @@ def train(
         **loader_order(None, len(train_set), world),
         **workers,
     )
-    net = PredictionNet(config)
+    net = PredictionNet(config).to(world.device)
     model = wrap(net, world, idle_parameters=True)
     opt = make_optimizer(net, config)
 
     def train_step(batch):
-        loss = sequence_loss(model, *batch)
+        loss = sequence_loss(model, *to_device(batch, world.device))
         return loss, {}
 
     def validate() -> dict[str, float]:

@@ -18,7 +18,14 @@ from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
-from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, wrap
+from afford.training.distributed import (
+    join_world,
+    loader_order,
+    rank_batch,
+    rank_threads,
+    to_device,
+    wrap,
+)
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
@@ -37,13 +44,15 @@ def train(
     progress: bool = True,
     init: str | Path | None = None,
     predicted: str | Path | None = None,
+    device: str = "auto",
 ) -> LoopState:
     """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
     another checkpoint's weights (fine-tuning), which must have the same architecture;
     `predicted`: a file of predicted states (`data/predicted.py`) that make up
     `config.predicted_fraction` of the batches, labelled by the true states' affordances.
-    Under torchrun, one rank of a DistributedDataParallel run (`training/distributed.py`)."""
-    world = join_world()
+    Under torchrun, one rank of a DistributedDataParallel run; `device`: auto, cpu or cuda
+    (`training/distributed.py`)."""
+    world = join_world(device)
     torch.set_num_threads(rank_threads(config.threads, world))
     torch.manual_seed(world.rank)  # each rank its own random stream; rank 0 is a lone run's
     data = Dataset(data_dir)
@@ -51,7 +60,13 @@ def train(
     train_set = RecognitionData(data, "train", augment, seed=world.rank)
     val_set = RecognitionData(data, "val")
     n_val = min(VAL_IMAGES, len(val_set))
-    val_batch = collate_recognition([val_set[i] for i in np.linspace(0, len(val_set) - 1, n_val).astype(int)])
+    val_images, val_rows = collate_recognition(
+        [val_set[i] for i in np.linspace(0, len(val_set) - 1, n_val).astype(int)]
+    )
+    val_images, val_targets = (
+        val_images.to(world.device),
+        to_device(build_targets(val_rows, config), world.device),
+    )
     sampler = None  # a shuffle
     if predicted is not None:
         futures = PredictedStates(predicted, data, augment, seed=world.rank)
@@ -64,20 +79,20 @@ def train(
         collate_fn=collate_recognition,
         **loader_order(sampler, len(train_set), world),
     )
-    net = RecognitionNet(config)
+    net = RecognitionNet(config).to(world.device)
     model = wrap(net, world)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
 
     def train_step(batch):
-        images, rows = batch
-        return loss(model(images), build_targets(rows, config), config)
+        images, rows = batch  # targets are built on the CPU, from the rows, then moved
+        targets = to_device(build_targets(rows, config), world.device)
+        return loss(model(images.to(world.device)), targets, config)
 
     def validate() -> dict[str, float]:
-        images, rows = val_batch
-        raw = torch.cat([net(images[i : i + 64]) for i in range(0, len(images), 64)])
-        total, parts = loss(raw, build_targets(rows, config), config)
+        raw = torch.cat([net(val_images[i : i + 64]) for i in range(0, len(val_images), 64)])
+        total, parts = loss(raw, val_targets, config)
         tally = Tally()
-        for dets, truth in zip(decode(raw, config), rows, strict=True):
+        for dets, truth in zip(decode(raw.cpu(), config), val_rows, strict=True):
             tally.add(
                 suppress(dets, config.suppress_radius, config.suppress_angle), rows_to_affordances(truth)
             )

@@ -34,14 +34,14 @@ def save_checkpoint(
     optimizer: torch.optim.Optimizer | None = None,
     extra: dict | None = None,
 ) -> None:
-    tensors = {f"model.{k}": v.detach().contiguous().clone() for k, v in model.state_dict().items()}
+    tensors = {f"model.{k}": v.detach().cpu().contiguous().clone() for k, v in model.state_dict().items()}
     groups = []
     if optimizer is not None:
         state = optimizer.state_dict()
         for idx, entries in state["state"].items():
             for name, value in entries.items():
                 t = value if torch.is_tensor(value) else torch.tensor(value)
-                tensors[f"optim.{idx}.{name}"] = t.detach().contiguous().clone()
+                tensors[f"optim.{idx}.{name}"] = t.detach().cpu().contiguous().clone()
         groups = state["param_groups"]
     meta = {
         "format": FORMAT_VERSION,

@@ -16,14 +16,7 @@ from afford.data.torch_data import PredictionData, collate_prediction, worker_in
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
-from afford.training.distributed import (
-    join_world,
-    loader_order,
-    rank_batch,
-    rank_threads,
-    to_device,
-    wrap,
-)
+from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
 

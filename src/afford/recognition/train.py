@@ -18,14 +18,7 @@ from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
-from afford.training.distributed import (
-    join_world,
-    loader_order,
-    rank_batch,
-    rank_threads,
-    to_device,
-    wrap,
-)
+from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU

@@ -76,3 +76,15 @@ def test_parametrise_turns_and_round_trip():
     assert [b.turn for b in parametrise([a])] == [90, -90]
     b = Affordance.from_dict(a.with_turn(-90).to_dict())
     assert b == a.with_turn(-90)
+
+
+def test_a_turn_takes_any_angle_up_to_a_half_turn_and_no_more():
+    import pytest
+
+    from afford.sim.affordances import Affordance
+
+    a = Affordance("turn", (0.0, 0.3, 0.03), 0.0, False, 37.5)
+    assert Affordance.from_dict(a.to_dict()) == a
+    for bad in (181.0, float("nan")):
+        with pytest.raises(ValueError, match=r"\[-180, 180\]"):
+            Affordance("turn", (0.0, 0.3, 0.03), 0.0, False, bad)

@@ -264,3 +264,16 @@ def test_generate_heals_corrupt_shards_and_info_names_them(small, tmp_path, caps
     assert problems == [] and good == m.n_shards
     a, b = Dataset(small), Dataset(root)
     assert all(_same(a, b, i) for i in range(len(original)))  # made again, identical
+
+
+def test_continuous_turn_angles_draw_any_angle_and_resume_only_as_made(tmp_path):
+    from afford.data.format import Col, DataError, Dataset
+    from afford.data.generate import GenerateConfig, generate
+
+    config = GenerateConfig(sequences=8, seed=6, workers=1, shard_size=4, turn_angles="continuous")
+    generate(tmp_path / "c", config, progress=False)
+    data = Dataset(tmp_path / "c")
+    turns = [float(r[Col.TURN]) for i in range(8) for r in data.sequence(i).actions if r[Col.TURN]]
+    assert turns and all(-180 <= t <= 180 for t in turns) and any(abs(t) != 90 for t in turns)
+    with pytest.raises(DataError, match="continuous turns"):
+        generate(tmp_path / "c", GenerateConfig(sequences=8, seed=6, workers=1, shard_size=4), progress=False)

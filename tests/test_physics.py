@@ -52,6 +52,17 @@ def test_d_cup_on_block_turns_with_it(scene):
     assert cup.pos[2] > BLOCK_TOP_ON_TABLE and cup.up_axis[2] > 0.95
 
 
+def test_d2_a_turn_by_any_angle_turns_the_block_and_its_cup_by_that_angle(scene):
+    # Continuous turns (paper V): the same turn, by 45 degrees.
+    scene.reset([O.upright("block", 0, 0.30), O.upright("cup", 0.09, 0.30, z=BLOCK_TOP_ON_TABLE)])
+    do(scene, "turn", (0, 0.30), turn=45.0)
+    cup = scene.object("cup0")
+    np.testing.assert_allclose(
+        cup.pos[:2], [0.09 * np.cos(np.pi / 4), 0.30 + 0.09 * np.sin(np.pi / 4)], atol=0.015
+    )
+    assert cup.up_axis[2] > 0.95
+
+
 def test_e_lifting_block_throws_off_object_on_it(scene):
     scene.reset([O.upright("block", 0, 0.30), O.upright("cup", 0.09, 0.30, z=BLOCK_TOP_ON_TABLE)])
     do(scene, "grasp", (0, 0.30))

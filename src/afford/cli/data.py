@@ -21,6 +21,7 @@ def cmd_generate(args) -> int:
         seed=args.seed,
         workers=args.workers,
         shard_size=args.shard_size,
+        turn_angles=args.turn_angles,
         executor="ray" if args.ray is not None else "local",
         address=args.ray or None,
     )
@@ -138,7 +139,7 @@ def cmd_data_show(args) -> int:
         pil = to_pil(seq.image(t))
         if t < seq.length:
             a = seq.action(t)
-            text = f"{t}: {a.type}" + (f" {a.turn:+d}" if a.turn else "")
+            text = f"{t}: {a.type}" + (f" {a.turn:+g}" if a.turn else "")
             panels.append(label(draw_affordances(pil, [a]), text))
         else:
             held = seq.held[t]
@@ -210,6 +211,13 @@ def add_parsers(sub) -> None:
         "folder must then be on storage every node sees",
     )
     g.add_argument("--shard-size", type=int, default=25, help="sequences per shard (default 25)")
+    g.add_argument(
+        "--turn-angles",
+        choices=("quarter", "continuous"),
+        default="quarter",
+        help="quarter: every turn +90 or -90, the paper's (default); continuous: a random angle of "
+        "either sign up to 180 degrees, to train a prediction net for continuous turns (paper V)",
+    )
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)
 

@@ -90,7 +90,7 @@ def cmd_demo(args) -> int:
         panels.append(
             label(
                 draw_affordances(to_pil(image), [a]),
-                f"{step}: {a.type}" + (f" {a.turn:+d}" if a.turn else ""),
+                f"{step}: {a.type}" + (f" {a.turn:+g}" if a.turn else ""),
             )
         )
         scene.execute(a)
@@ -103,7 +103,7 @@ def cmd_demo(args) -> int:
 
 
 def _outcome_line(o) -> str:
-    plan = "-" if o.plan is None else " > ".join(a.type + (f"{a.turn:+d}" if a.turn else "") for a in o.plan)
+    plan = "-" if o.plan is None else " > ".join(a.type + (f"{a.turn:+g}" if a.turn else "") for a in o.plan)
     return f"{'solved' if o.success else 'FAILED'}: {plan}"
 
 

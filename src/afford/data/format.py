@@ -71,7 +71,7 @@ def decode_affordance(row: np.ndarray) -> Affordance:
         tuple(float(v) for v in row[Col.POSITION]),
         float(row[Col.ANGLE]),
         bool(row[Col.SYMMETRIC] > 0.5),
-        int(round(float(row[Col.TURN]))),
+        float(row[Col.TURN]),
     )
 
 

@@ -46,6 +46,9 @@ class GenerateConfig:
     workers: int = 2
     shard_size: int = 25  # ~10 s of work per shard on one core: little lost to a kill
     max_steps: int = 4  # executions per sequence (paper III.B)
+    # "quarter": each drawn turn is +90 or -90 (the paper's); "continuous": the turn's angle is
+    # drawn from [-180, 180] (paper V), for a prediction net that learns any angle.
+    turn_angles: str = "quarter"
     executor: str = "local"  # a key of EXECUTORS
     address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
@@ -72,7 +75,12 @@ def _pose_array(scene: Scene) -> np.ndarray:
     return np.array(rows, dtype=np.float32)
 
 
-def make_sequence(scene: Scene, seed: int, index: int, max_steps: int) -> tuple[Sequence, int]:
+TURN_ANGLES = ("quarter", "continuous")
+
+
+def make_sequence(
+    scene: Scene, seed: int, index: int, max_steps: int, turn_angles: str = "quarter"
+) -> tuple[Sequence, int]:
     """Sequence `index` of the dataset with `seed`, and how many drawn executions failed."""
     rng = np.random.default_rng([seed, index])
     scene.reset(random_layout(rng, LayoutConfig()), check=False)  # free of overlaps by construction
@@ -92,6 +100,12 @@ def make_sequence(scene: Scene, seed: int, index: int, max_steps: int) -> tuple[
         # Draw from the list with turn parameters filled in (paper II.D); an affordance the
         # arm cannot carry out is put back to the scene as it was and another is drawn.
         candidates = parametrise(affs)
+        if turn_angles == "continuous":
+            # Each +-90 becomes an angle of its sign and a random size: still one each way.
+            candidates = [
+                a.with_turn(float(np.sign(a.turn) * rng.uniform(1.0, 180.0))) if a.turn else a
+                for a in candidates
+            ]
         executed = None
         while candidates and executed is None:
             a = candidates.pop(int(rng.integers(len(candidates))))
@@ -125,6 +139,7 @@ class ShardJob:
     stop: int
     seed: int
     max_steps: int
+    turn_angles: str = "quarter"
 
 
 @dataclass(frozen=True)
@@ -145,7 +160,7 @@ def make_shard(job: ShardJob) -> ShardResult:
         _worker_scene = Scene()
     seqs, failed = [], 0
     for i in range(job.start, job.stop):
-        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps)
+        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps, job.turn_angles)
         seqs.append(seq)
         failed += f
     write_shard(shard_path(Path(job.root), job.shard), seqs)
@@ -186,7 +201,11 @@ def _manifest_for(config: GenerateConfig) -> Manifest:
         max_steps=config.max_steps,
         slots=slots,
         splits=default_splits(config.sequences),
-        generator={"afford": __version__, "layout": asdict(LayoutConfig())},
+        generator={
+            "afford": __version__,
+            "layout": asdict(LayoutConfig()),
+            "turn_angles": config.turn_angles,
+        },
     )
 
 
@@ -194,15 +213,20 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
     """Write the manifest of a new dataset, or check that an existing one matches `config`."""
     if config.sequences < 1:
         raise DataError("--sequences must be at least 1")
+    if config.turn_angles not in TURN_ANGLES:
+        raise DataError(
+            f"unknown turn angles {config.turn_angles!r}; expected one of {', '.join(TURN_ANGLES)}"
+        )
     if (root / "dataset.json").exists():
         m = read_manifest(root)
-        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps)
-        ours = (config.sequences, config.seed, config.shard_size, config.max_steps)
+        turns = m.generator.get("turn_angles", "quarter")
+        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns)
+        ours = (config.sequences, config.seed, config.shard_size, config.max_steps, config.turn_angles)
         if theirs != ours:
             raise DataError(
                 f"{root}: holds a dataset of {m.sequences} sequences, seed {m.seed}, shard size "
-                f"{m.shard_size}, max steps {m.max_steps}; resume it with the same settings or use "
-                "another --out"
+                f"{m.shard_size}, max steps {m.max_steps}, {turns} turns; resume it with the same "
+                "settings or use another --out"
             )
         return m
     m = _manifest_for(config)
@@ -231,7 +255,7 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
     report.skipped_shards = len(present)
     done = sum(len(manifest.shard_range(k)) for k in present)
     jobs = [
-        ShardJob(str(root), k, r.start, r.stop, config.seed, config.max_steps)
+        ShardJob(str(root), k, r.start, r.stop, config.seed, config.max_steps, config.turn_angles)
         for k in missing
         for r in [manifest.shard_range(k)]
     ]

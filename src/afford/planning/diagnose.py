@@ -107,7 +107,7 @@ def diagnose(task: Task, scene: Scene, learned, config: SearchConfig | None = No
         node = Node(node.plan + (action,), image, state)
         steps.append(
             StepCheck(
-                action.type + (f"{action.turn:+d}" if action.turn else ""),
+                action.type + (f"{action.turn:+g}" if action.turn else ""),
                 any(matches(e, action) for e in same),
                 None if near is None else near * 100,
                 float(task.goal.loss(image[None])[0]),

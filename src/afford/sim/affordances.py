@@ -28,24 +28,25 @@ class Affordance:
     type: grasp, place or turn. position: the target point (x, y, z) in metres, world frame:
     an object's centre for grasp and turn, a point on a surface for place. angle: gripper yaw
     in degrees, [0, 360), the direction the fingers open along. symmetric: other angles at the
-    same point give equivalent results. turn: the turn affordance's execution parameter, +90
-    (counter-clockwise seen from above) or -90; 0 for other types and for a turn not yet
-    parametrised (paper II.D fills it in).
+    same point give equivalent results. turn: the turn affordance's execution parameter in
+    degrees, counter-clockwise seen from above: +90 or -90 in the paper (II.D fills it in), any
+    angle in [-180, 180] with continuous turns (paper V); 0 for other types and for a turn not
+    yet parametrised.
     """
 
     type: str
     position: tuple[float, float, float]
     angle: float
     symmetric: bool
-    turn: int = 0
+    turn: float = 0
 
     def __post_init__(self):
         if self.type not in REGISTRY:
             raise ValueError(f"unknown affordance type {self.type!r}; expected one of {tuple(REGISTRY)}")
-        if self.turn not in (0, 90, -90):
-            raise ValueError(f"turn must be +90, -90 or 0, not {self.turn}")
+        if not (np.isfinite(self.turn) and -180 <= self.turn <= 180):
+            raise ValueError(f"turn must be an angle in [-180, 180] degrees (0: none), not {self.turn}")
 
-    def with_turn(self, turn: int) -> Affordance:
+    def with_turn(self, turn: float) -> Affordance:
         return replace(self, turn=turn)
 
     def to_dict(self) -> dict:
@@ -61,7 +62,7 @@ class Affordance:
             tuple(float(v) for v in d["position"]),
             float(d["angle"]),
             bool(d["symmetric"]),
-            int(d.get("turn", 0)),
+            float(d.get("turn", 0)),
         )
 
 

@@ -40,7 +40,7 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
         return ExecutionResult(aff, False, None, 0, f"cannot {aff.type} with an empty gripper")
     if not kind.holding and scene.held is not None:
         return ExecutionResult(aff, False, scene.held, 0, f"cannot {aff.type} while holding {scene.held}")
-    if kind.parameters and aff.turn not in kind.parameters:
+    if kind.parameters and aff.turn == 0:
         raise ValueError(f"a {aff.type} affordance needs its parameter: use aff.with_turn({kind.parameters})")
 
     target = np.asarray(aff.position, dtype=float)

@@ -40,7 +40,7 @@ def plan_strip(outcome, goal, path: str | Path) -> None:
         if i < len(plan):
             a = plan[i]
             pil = draw_affordances(pil, [a])
-            text = f"{'start' if i == 0 else f'planned {i}'}: {a.type}" + (f" {a.turn:+d}" if a.turn else "")
+            text = f"{'start' if i == 0 else f'planned {i}'}: {a.type}" + (f" {a.turn:+g}" if a.turn else "")
         else:
             text = "start (no plan)" if i == 0 and not plan else f"planned {i}"
         panels.append(label(pil, text))

@@ -41,6 +41,11 @@ class Goal:
         """Eq. (5) for a batch of states (B, H, W, 4) -> (B,)."""
         return window_mse(self.patch, states[..., : self.patch.shape[2]]).min(axis=(1, 2))
 
+    def loss_torch(self, states):
+        """Eq. (5) for a batch of torch states (B, C, H, W) -> (B,), differentiable in the
+        states (through the best window): what gradient descent on an action runs on."""
+        return window_mse_torch(self.patch, states[:, : self.patch.shape[2]]).amin(dim=(1, 2))
+
     def best(self, losses: np.ndarray) -> int:
         """Eq. (4): argmin for a positive goal, argmax for a negative one."""
         return int(np.argmax(losses) if self.negative else np.argmin(losses))
@@ -75,3 +80,19 @@ def window_mse(patch: np.ndarray, states: np.ndarray) -> np.ndarray:
     window_sq = sq[:, h:, w:] - sq[:, :-h, w:] - sq[:, h:, :-w] + sq[:, :-h, :-w]
     total = window_sq - 2 * cross + (g**2).sum()
     return np.maximum(total, 0.0) / (h * w * c)
+
+
+def window_mse_torch(patch: np.ndarray, states):
+    """`window_mse` in torch for states (B, C, H, W): (B, H - h + 1, W - w + 1), by
+    convolutions (the cross term with the patch, the window sums of squares with ones)."""
+    import torch
+    import torch.nn.functional as F
+
+    chw = np.ascontiguousarray(patch.transpose(2, 0, 1))
+    g = torch.as_tensor(chw, dtype=states.dtype, device=states.device)
+    c, h, w = g.shape
+    if states.shape[1] != c:
+        raise GoalError(f"goal patch has {c} channels but the states have {states.shape[1]}")
+    cross = F.conv2d(states, g[None])[:, 0]
+    window_sq = F.conv2d((states**2).sum(1, keepdim=True), torch.ones_like(g[:1])[None])[:, 0]
+    return (window_sq - 2 * cross + (g**2).sum()).clamp_min(0.0) / (h * w * c)

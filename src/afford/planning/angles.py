@@ -1,0 +1,101 @@
+"""Continuous turn angles by back-propagation through the prediction net (paper V).
+
+Section V: "parameters such as the turn angle ... should be generalised to continuous values
+... run-time optimisation of the parameters of selected affordances using a back-propagation
+strategy". The simulator is not differentiable but the prediction net is: for a plan that
+holds turns, the plan is rolled out through the net from the start image, its last state is
+scored against the goal patch by eq. (5) (`Goal.loss_torch`), and gradient descent moves
+every turn's angle at once. The angle is 180 tanh(u) of a free u, so it stays in
+[-180, 180]; a few restarts from spread-out angles keep the descent out of the nearest
+local minimum. It needs a prediction net trained on turns by any angle (`afford generate
+--turn-angles continuous`): a net that only saw +-90 has learned nothing in between.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from afford.data.format import Col, encode_affordance
+from afford.planning.goal import Goal
+from afford.sim.affordances import Affordance
+
+RESTART_ANGLES = (-135.0, -45.0, 45.0, 135.0)  # starting points, one per quadrant
+STEPS = 40  # gradient steps per restart
+LR = 0.1  # Adam's step on u, where the angle is 180 tanh(u)
+
+
+@dataclass
+class TurnOptimisation:
+    plan: tuple[Affordance, ...]  # the plan with its turns at the best angles found
+    loss: float  # eq. (5) of its predicted last state
+    start_loss: float  # the same for the plan as given
+    curves: list[list[float]] = field(default_factory=list)  # eq. (5) per step, per restart
+
+
+def optimise_turns(
+    net,
+    start: np.ndarray,
+    plan: tuple[Affordance, ...],
+    goal: Goal,
+    restarts: tuple[float, ...] = RESTART_ANGLES,
+    steps: int = STEPS,
+    lr: float = LR,
+) -> TurnOptimisation:
+    """Every turn of `plan` at the angle that brings the predicted outcome closest to `goal`.
+
+    `net`: anything with PredictionNet's `rollout(image (1, C, H, W), actions (1, L, 7))`.
+    `start`: the (H, W, C) start image. Each restart sets all turns to one angle of
+    `restarts`; the plan as given is scored too, and wins if nothing beats it."""
+    turns = [i for i, a in enumerate(plan) if a.turn]
+    image = torch.from_numpy(np.ascontiguousarray(start.transpose(2, 0, 1)))[None].float()
+    rows = torch.from_numpy(np.stack([encode_affordance(a) for a in plan]))[None]
+
+    def outcome(angles: torch.Tensor) -> torch.Tensor:
+        actions = rows.clone()
+        actions[0, turns, Col.TURN] = angles
+        return goal.loss_torch(net.rollout(image, actions)[:, -1])[0]
+
+    with torch.no_grad():
+        given = float(outcome(torch.tensor([plan[i].turn for i in turns], dtype=torch.float32)))
+    best_loss, best_angles, curves = given, [plan[i].turn for i in turns], []
+    if not turns:
+        return TurnOptimisation(plan, given, given)
+    # Only the angles learn: the net's own weights are held (and restored after).
+    weights = [p for p in getattr(net, "parameters", list)() if p.requires_grad]
+    for p in weights:
+        p.requires_grad_(False)
+    try:
+        curves = _descend(outcome, len(turns), restarts, steps, lr)
+    finally:
+        for p in weights:
+            p.requires_grad_(True)
+    for curve, angles in curves:
+        if curve and min(curve) < best_loss:
+            best_loss, best_angles = min(curve), angles
+    new = list(plan)
+    for i, angle in zip(turns, best_angles, strict=True):
+        new[i] = plan[i].with_turn(float(np.clip(angle, -180.0, 180.0)) or 1e-3)
+    return TurnOptimisation(tuple(new), best_loss, given, [c for c, _ in curves])
+
+
+def _descend(outcome, n: int, restarts, steps: int, lr: float) -> list[tuple[list[float], list[float]]]:
+    """Per restart: eq. (5) at each step, and the angles where it was least."""
+    out = []
+    for angle in restarts:
+        u = torch.full((n,), float(np.arctanh(angle / 180.0)), requires_grad=True)
+        opt = torch.optim.Adam([u], lr=lr)
+        curve, best, where = [], float("inf"), []
+        for _ in range(steps):
+            angles = 180.0 * torch.tanh(u)
+            loss = outcome(angles)
+            curve.append(float(loss.detach()))
+            if curve[-1] < best:
+                best, where = curve[-1], angles.detach().tolist()
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        out.append((curve, where))
+    return out

@@ -333,6 +333,13 @@ def _add_search_arguments(parser, max_nodes: bool = True) -> None:
         help="hybrid planners: a canonical plan is kept when its predicted outcome removes at least this "
         f"share of the start's goal loss, eq. 5 (default {SearchConfig.accept})",
     )
+    parser.add_argument(
+        "--optimise-turns",
+        action="store_true",
+        help="learned planner: optimise the turn angles of the best plan with turns by gradient descent "
+        "on eq. 5 through the prediction net (paper V), keeping it when it comes closer; needs a "
+        "prediction net trained on continuous turns (afford generate --turn-angles continuous)",
+    )
     if max_nodes:
         parser.add_argument(
             "--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP
@@ -356,6 +363,7 @@ def _search_config(args, progress: bool):
         beam_width=args.beam_width,
         budget=args.budget,
         accept=args.accept,
+        optimise_turns=args.optimise_turns,
     )
 
 

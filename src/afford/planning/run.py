@@ -90,7 +90,13 @@ def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome
 
         learned = load_learned()
     scene.reset(task.scene)
-    return _solve_search(task, "learned", LearnedModel(scene.observe(), *learned), scene, config)
+    model = LearnedModel(scene.observe(), *learned)
+    result = search(model, task.goal, task.max_steps, config)
+    if config.optimise_turns:
+        from afford.planning.angles import with_optimised_turns
+
+        result = with_optimised_turns(result, model, task.goal)
+    return _judge(task, "learned", result, scene)
 
 
 def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:

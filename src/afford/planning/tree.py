@@ -93,6 +93,9 @@ class SearchConfig:
     # Hybrid planners (planning/hybrid.py): the share of the start's eq. (5) loss a canonical
     # plan's predicted outcome must remove to be kept.
     accept: float = 0.5
+    # The learned planner: optimise the turn angles of the best plan with turns by gradient
+    # descent through the prediction net (planning/angles.py) and keep it when it is closer.
+    optimise_turns: bool = False
 
 
 class TreeTooLarge(ValueError):

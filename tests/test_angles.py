@@ -50,3 +50,38 @@ def test_two_turns_are_optimised_together_and_a_plan_without_turns_is_kept():
     grasp = (Affordance("grasp", (0.0, 0.3, 0.03), 0.0, True),)
     kept = optimise_turns(Dial(), start, grasp, goal)
     assert kept.plan == grasp and kept.curves == []
+
+
+class DialModel:
+    """The Dial as a learned planner's world model: its start image, its net, its predict."""
+
+    def __init__(self):
+        self.net, self.image = Dial(), np.zeros((SIZE, SIZE, 4), dtype=np.float32)
+
+    def predict(self, parents, actions):
+        out = []
+        for parent, a in zip(parents, actions, strict=True):
+            total = (parent.state or 0.0) + a.turn
+            out.append((blob(torch.tensor(total)).numpy().transpose(1, 2, 0).copy(), total))
+        return out
+
+
+def test_the_planner_keeps_the_optimised_plan_only_when_it_comes_closer():
+    from afford.planning.angles import with_optimised_turns
+    from afford.planning.tree import Node, SearchResult
+
+    model = DialModel()
+    goal = Goal(blob(torch.tensor(30.0)).numpy().transpose(1, 2, 0).copy())
+    root = Node((), model.image, None)
+    nodes = [root]
+    for a in (turn(90.0), turn(-90.0)):
+        image, state = model.predict([root], [a])[0]
+        nodes.append(Node((a,), image, state, parent=0))
+    for n in nodes:
+        n.loss = float(goal.loss(n.image[None])[0])
+    searched = SearchResult(nodes, 1, 0.0, 1, [1, 2])
+    r = with_optimised_turns(searched, model, goal)
+    assert len(r.plan) == 1 and abs(r.plan[0].turn - 30.0) < 3.0 and r.loss < searched.loss
+    assert [n.depth for n in r.path()] == [0, 1]
+    kept = with_optimised_turns(searched, model, Goal(goal.patch, negative=True))
+    assert kept is searched  # a negative goal is left alone

@@ -118,10 +118,10 @@ def with_optimised_turns(result: SearchResult, model, goal: Goal) -> SearchResul
     if found.loss >= result.loss:
         result.seconds += time.perf_counter() - t0  # the descent counts as planning time
         return result
-    chain = [result.nodes[0]]
-    for a in found.plan:  # the plan's states, for its picture and its record
-        (image, state) = model.predict([chain[-1]], [a])[0]
-        chain.append(Node(chain[-1].plan + (a,), image, state, parent=len(chain) - 1))
-        chain[-1].loss = float(goal.loss(image[None])[0])
+    nodes, at = list(result.nodes), 0
+    for a in found.plan:  # the plan's states, added to the tree for its picture and its record
+        (image, state) = model.predict([nodes[at]], [a])[0]
+        nodes.append(Node(nodes[at].plan + (a,), image, state, parent=at))
+        nodes[-1].loss, at = float(goal.loss(image[None])[0]), len(nodes) - 1
     seconds = result.seconds + time.perf_counter() - t0
-    return SearchResult(chain, len(chain) - 1, seconds, result.expanded, result.per_depth, result.truncated)
+    return SearchResult(nodes, at, seconds, result.expanded, result.per_depth, result.truncated)

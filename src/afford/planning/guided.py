@@ -28,15 +28,6 @@ def _order(tree: Growth, index: int) -> float:
     return -loss if tree.goal.negative else loss
 
 
-def _per_depth(tree: Growth, max_steps: int) -> list[int]:
-    counts = [0] * (max_steps + 1)
-    for n in tree.nodes:
-        counts[n.depth] += 1
-    while len(counts) > 1 and counts[-1] == 0:
-        counts.pop()
-    return counts
-
-
 def beam(tree: Growth, max_steps: int) -> SearchResult:
     """Beam search: each depth's `beam_width` best states are expanded. The children of the
     better parents come first, so when the budget cuts a depth short it drops the worst."""
@@ -49,7 +40,7 @@ def beam(tree: Growth, max_steps: int) -> SearchResult:
         frontier = sorted(made, key=lambda i: _order(tree, i))[: tree.config.beam_width]
         if not frontier or tree.truncated:
             break
-    return tree.result(_per_depth(tree, max_steps))
+    return tree.result(tree.per_depth())
 
 
 def best_first(tree: Growth, max_steps: int) -> SearchResult:
@@ -69,7 +60,7 @@ def best_first(tree: Growth, max_steps: int) -> SearchResult:
                 if tree.nodes[i].depth < max_steps:
                     heapq.heappush(open_nodes, (_order(tree, i), i))
             bar.update(len(made))
-    return tree.result(_per_depth(tree, max_steps))
+    return tree.result(tree.per_depth())
 
 
 # Each strategy: (a tree holding only its root, max steps) -> SearchResult.

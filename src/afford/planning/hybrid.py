@@ -82,9 +82,7 @@ def plan_hybrid(
     if good:
         losses = [tree.nodes[i].loss for i in good]
         best = good[goal.best(losses)]
-        depths = [n.depth for n in tree.nodes]
-        per_depth = [depths.count(d) for d in range(max(depths) + 1)]
-        result = SearchResult(tree.nodes, best, time.perf_counter() - start, 0, per_depth)
+        result = SearchResult(tree.nodes, best, time.perf_counter() - start, 0, tree.per_depth())
         return HybridResult(result, "symbolic", len(proposals), len(proposals) - len(good))
     fallback = search(model, goal, max_steps, config)
     fallback.seconds = time.perf_counter() - start  # the checks count too

@@ -84,11 +84,17 @@ def _oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
     return _solve_search(task, "oracle", OracleModel(scene), scene, config)
 
 
-def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _nets(learned):
+    """The (Recognizer, PredictionNet) pair given, or the weights shipped in the package."""
     if learned is None:
         from afford.planning.learned import load_learned
 
-        learned = load_learned()
+        return load_learned()
+    return learned
+
+
+def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    learned = _nets(learned)
     scene.reset(task.scene)
     model = LearnedModel(scene.observe(), *learned)
     result = search(model, task.goal, task.max_steps, config)
@@ -104,10 +110,7 @@ def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcom
 
 
 def _hybrid(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
-    if learned is None:
-        from afford.planning.learned import load_learned
-
-        learned = load_learned()
+    learned = _nets(learned)
     return _solve_hybrid(task, "hybrid", lambda start: LearnedModel(start, *learned), scene, config)
 
 

@@ -209,6 +209,11 @@ class Growth:
                 bar.update(len(batch))
         return made_here
 
+    def per_depth(self) -> list[int]:
+        """States grown at each depth, the root's first."""
+        depths = [n.depth for n in self.nodes]
+        return [depths.count(d) for d in range(max(depths) + 1)]
+
     def result(self, per_depth: list[int]) -> SearchResult:
         best = choose(self.nodes, self.goal, self.config.tie_tolerance)
         seconds = time.perf_counter() - self.start

@@ -29,7 +29,8 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    recognizer, predictor = load_learned(args.weights)
+    nets = load_learned(args.weights)
+    recognizer, predictor = nets.recognizer, nets.predictor
     scene = Scene()
     task = load_task(args.task, scene)
     result = {"task": task.name, "max_steps": task.max_steps, "threads": args.threads}

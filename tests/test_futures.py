@@ -16,7 +16,7 @@ from afford.prediction.futures import BASELINES, future_recall
 
 @pytest.fixture(scope="module")
 def recognizer():
-    return load_learned()[0]
+    return load_learned().recognizer
 
 
 def test_a_prediction_equal_to_the_truth_scores_like_the_truth(small_dataset, recognizer):

@@ -139,12 +139,13 @@ def test_diagnosis_names_recognition_when_the_working_plan_is_not_recognised(sce
     from test_tasks import GOOD
 
     from afford.planning.diagnose import diagnose
+    from afford.planning.learned import LearnedNets
     from afford.planning.tasks import task_from_json
 
     torch.manual_seed(0)
     recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.999)
     task = task_from_json(GOOD, scene=scene)
-    d = diagnose(task, scene, (recognizer, PredictionNet(PRED["tiny"])))
+    d = diagnose(task, scene, LearnedNets(recognizer, PredictionNet(PRED["tiny"])))
     assert d.oracle.success and not d.learned.success
     assert d.cause == "recognition"
     assert [s.action for s in d.steps] == ["grasp", "place"] and not d.steps[0].recognised

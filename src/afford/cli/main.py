@@ -109,15 +109,18 @@ def _outcome_line(o) -> str:
 
 def cmd_plan(args) -> int:
     """Plan a task file, execute the plan in the simulator, draw it (paper Fig. 8)."""
-    from afford.planning.run import USES_NETS, solve
+    from afford.planning.run import USES_NETS, execute_perturbed, solve
     from afford.planning.tasks import load_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
 
     scene = Scene()
     task = load_task(args.task, scene)
+    perturbation = _perturbation(args)
     learned = _learned(args) if args.planner in USES_NETS else None
     outcome = solve(task, args.planner, scene, _search_config(args, progress=not args.json), learned)
+    if perturbation is not None:
+        execute_perturbed(outcome, task, scene, perturbation, args.executions)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     picture = out / f"{task.name}-{args.planner}.png"
@@ -132,6 +135,12 @@ def cmd_plan(args) -> int:
             f"  {outcome.nodes} nodes, {outcome.seconds:.1f} s planning"
             + (f"; {outcome.reason}" if outcome.reason else "")
         )
+        if outcome.perturbed:
+            rate = sum(outcome.perturbed) / len(outcome.perturbed)
+            print(
+                f"  perturbed executions: {sum(outcome.perturbed)}/{len(outcome.perturbed)} "
+                f"succeed ({rate:.0%})"
+            )
         print(f"  picture: {picture}")
     scene.close()
     return 0 if outcome.success else 1
@@ -139,7 +148,7 @@ def cmd_plan(args) -> int:
 
 def cmd_bench_tasks(args) -> int:
     """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
-    from afford.planning.run import USES_NETS, solve
+    from afford.planning.run import USES_NETS, execute_perturbed, solve
     from afford.planning.tasks import load_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
@@ -148,6 +157,7 @@ def cmd_bench_tasks(args) -> int:
     if not files:
         raise CLIError(f"{args.tasks}: no task files (*.json) there")
     planners = _planners(args.planner)
+    perturbation = _perturbation(args)
     learned = _learned(args) if any(p in USES_NETS for p in planners) else None
     config = _search_config(args, progress=False)
     scene = Scene()
@@ -160,6 +170,8 @@ def cmd_bench_tasks(args) -> int:
             if live:
                 print(f"{task.name} ...", end="", flush=True)
             o = solve(task, planner, scene, config, learned)
+            if perturbation is not None:
+                execute_perturbed(o, task, scene, perturbation, args.executions)
             if args.out:
                 plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
             rows.append(o.to_dict())
@@ -168,8 +180,18 @@ def cmd_bench_tasks(args) -> int:
                 print(f"{back}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
                 if o.reason:
                     print(f"{'':32s} {o.reason}")
+                if o.perturbed:
+                    print(f"{'':32s} perturbed: {sum(o.perturbed)}/{len(o.perturbed)} executions succeed")
         solved = sum(r["solved"] for r in rows)
         report[planner] = {"solved": solved, "tasks": rows}
+        if perturbation is not None:
+            rates = [r["perturbed_success_rate"] for r in rows]
+            report[planner]["perturbed_success_rate"] = round(sum(rates) / len(rates), 4)
+            if not args.json:
+                print(
+                    f"{planner}: {sum(rates) / len(rates):.0%} of perturbed executions succeed, "
+                    "over the tasks"
+                )
         expected = [r["success_rate"] for r in rows if "success_rate" in r]
         if expected:
             report[planner]["expected_solved"] = round(sum(expected), 3)
@@ -340,10 +362,53 @@ def _add_search_arguments(parser, max_nodes: bool = True) -> None:
         "on eq. 5 through the prediction net (paper V), keeping it when it comes closer; needs a "
         "prediction net trained on continuous turns (afford generate --turn-angles continuous)",
     )
+    parser.add_argument(
+        "--risk",
+        type=float,
+        default=SearchConfig.risk,
+        metavar="W",
+        help="ensemble planner: a plan scores the members' mean goal loss (eq. 5) plus W standard "
+        f"deviations of it over the members: risk-averse (default {SearchConfig.risk}); 0: the mean alone",
+    )
     if max_nodes:
         parser.add_argument(
             "--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP
         )
+
+
+def _add_perturb_arguments(parser) -> None:
+    """Executions from perturbed starts (sim/perturb.py): outcomes that succeed only sometimes."""
+    from afford.sim.perturb import Perturbation
+
+    parser.add_argument(
+        "--perturb",
+        type=str,
+        metavar="METRES[,DEGREES]",
+        help="after planning, execute the plan --executions times, each time with every pile of objects "
+        "shifted by a Gaussian of this standard deviation (and turned by DEGREES, default "
+        f"{Perturbation.yaw:g}), and report the share that succeed",
+    )
+    parser.add_argument(
+        "--executions", type=int, default=20, metavar="N", help="perturbed executions per plan (default 20)"
+    )
+
+
+def _perturbation(args):
+    """The --perturb of the command line, or None."""
+    from afford.sim.perturb import Perturbation
+
+    if not getattr(args, "perturb", None):
+        return None
+    try:
+        sizes = [float(v) for v in args.perturb.split(",")]
+        if len(sizes) > 2:
+            raise ValueError
+        perturbation = Perturbation(*sizes)
+    except ValueError:
+        raise CLIError(f"--perturb {args.perturb!r}: expected METRES or METRES,DEGREES, both >= 0") from None
+    if args.executions < 1:
+        raise CLIError("--executions must be at least 1")
+    return perturbation
 
 
 def _search_config(args, progress: bool):
@@ -364,11 +429,13 @@ def _search_config(args, progress: bool):
         budget=args.budget,
         accept=args.accept,
         optimise_turns=args.optimise_turns,
+        risk=args.risk,
     )
 
 
 PLANNERS_HELP = (
-    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle), several as a comma list, or all"
+    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble), several as a comma list, "
+    "or all"
 )
 MAX_NODES_HELP = (
     "refuse to grow a tree past this many states, with the estimate, before growing the depth that "
@@ -427,6 +494,7 @@ def build_parser() -> argparse.ArgumentParser:
     pl.add_argument("--planner", choices=PLANNERS, default="oracle")
     pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
     pl.add_argument("--json", action="store_true", help="print the record as JSON")
+    _add_perturb_arguments(pl)
     pl.add_argument(
         "--weights",
         "--run-dir",
@@ -452,6 +520,7 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")
+    _add_perturb_arguments(bt)
     _add_search_arguments(bt)
     bt.set_defaults(func=cmd_bench_tasks)
 
@@ -518,6 +587,8 @@ def main(argv: list[str] | None = None) -> int:
     from afford.data.format import DataError
     from afford.planning.tasks import TaskError
     from afford.planning.tree import TreeTooLarge
+    from afford.planning.uncertain import EnsembleError
+    from afford.sim.perturb import PerturbError
     from afford.sim.scene import SceneError
     from afford.training.checkpoint import CheckpointError
     from afford.training.memory import keep_freed_memory
@@ -526,7 +597,16 @@ def main(argv: list[str] | None = None) -> int:
     keep_freed_memory()  # the nets' large tensors recur every step: keep their memory
     try:
         return args.func(args)
-    except (CLIError, SceneError, TaskError, DataError, CheckpointError, TreeTooLarge) as e:
+    except (
+        CLIError,
+        SceneError,
+        TaskError,
+        DataError,
+        CheckpointError,
+        TreeTooLarge,
+        EnsembleError,
+        PerturbError,
+    ) as e:
         print(f"afford: error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

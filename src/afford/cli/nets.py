@@ -93,7 +93,7 @@ def cmd_eval(args) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         recognizer = None
         if not args.no_futures:
-            recognizer, _ = _load_weights(args.recognition)
+            recognizer = _load_weights(args.recognition).recognizer
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
     _report(args, result, folder, *EVALS[args.net], format_table(result))
     return 0
@@ -126,7 +126,8 @@ def cmd_futures(args) -> int:
     from afford.data.format import Dataset
     from afford.prediction.futures import BASELINES, format_report, future_recalls, net_predictor, pictures
 
-    recognizer, net = _load_weights(args.weights)
+    nets = _load_weights(args.weights)
+    recognizer, net = nets.recognizer, nets.predictor
     torch.set_num_threads(net.config.threads)
     data = Dataset(args.data)
     folder = Path(args.out)
@@ -152,11 +153,13 @@ def cmd_export(args) -> int:
     float32, since float16 moved detections across the cut-off (one of 797 on the train
     states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
     from afford.planning.learned import PREDICTION_FILE, RECOGNITION_FILE
+    from afford.prediction.ensemble import MEMBERS_DIR
     from afford.recognition.infer import THRESHOLD_FILE
     from afford.training.checkpoint import export_weights
 
     rec_run, pred_run = Path(args.recognition), Path(args.prediction)
-    for run in (rec_run, pred_run):
+    members = [Path(m) for m in args.member or ()]
+    for run in (rec_run, pred_run, *members):
         _check_run(str(run))
     threshold_file = rec_run / THRESHOLD_FILE
     extra = json.loads(threshold_file.read_text()) if threshold_file.is_file() else {}
@@ -167,6 +170,10 @@ def cmd_export(args) -> int:
         ),
         PREDICTION_FILE: export_weights(pred_run / args.checkpoint, out / PREDICTION_FILE, "prediction"),
     }
+    for k, run in enumerate(members, start=1):
+        name = f"{MEMBERS_DIR}/prediction-{k}.safetensors"
+        (out / MEMBERS_DIR).mkdir(parents=True, exist_ok=True)
+        sizes[name] = export_weights(run / args.checkpoint, out / name, "prediction")
     for name, size in sizes.items():
         print(f"{out / name}: {size / 2**20:.1f} MiB")
     return 0
@@ -307,6 +314,13 @@ def add_parsers(sub) -> None:
     )
     x.add_argument("--recognition", required=True, metavar="RUN")
     x.add_argument("--prediction", required=True, metavar="RUN")
+    x.add_argument(
+        "--member",
+        action="append",
+        metavar="RUN",
+        help="a prediction run to ship as a member of the ensemble planner's ensemble (beside --prediction); "
+        "repeat for more",
+    )
     x.add_argument("--checkpoint", default="best.safetensors")
     x.add_argument("--out", required=True, metavar="DIR")
     x.set_defaults(func=cmd_export)

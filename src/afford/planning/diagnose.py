@@ -92,7 +92,7 @@ def diagnose(task: Task, scene: Scene, learned, config: SearchConfig | None = No
     if not oracle.success:
         return Diagnosis(task.name, "oracle fails", mine, oracle, chosen_true_loss=chosen_true)
     scene.reset(task.scene)
-    model = LearnedModel(scene.observe(), *learned)
+    model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
     truth = execute_plan(scene, task.scene, oracle.plan, task.success).images
     image, state = model.root()
     node = Node((), image, state)

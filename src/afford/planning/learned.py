@@ -114,10 +114,23 @@ class LearnedModel:
         return torch.from_numpy(np.ascontiguousarray(np.stack(images), dtype=np.float32)).permute(0, 3, 1, 2)
 
 
-def load_learned(weights: str | Path | None = None) -> tuple[Recognizer, PredictionNet]:
-    """The recognizer (with its tuned cut-off) and the prediction net from a weights folder."""
+@dataclass
+class LearnedNets:
+    """The trained nets of a weights folder."""
+
+    recognizer: Recognizer  # with its tuned cut-off
+    predictor: PredictionNet
+    # The prediction nets of the ensemble planner (prediction/ensemble.py): the predictor
+    # first, then the folder's ensemble/ members; just the predictor when it has none.
+    members: tuple[PredictionNet, ...] = ()
+
+
+def load_learned(weights: str | Path | None = None) -> LearnedNets:
+    """The recognizer, the prediction net and the ensemble's members from a weights folder
+    (default: the shipped one)."""
     import json
 
+    from afford.prediction.ensemble import check_members, member_paths
     from afford.recognition.infer import THRESHOLD_FILE, load_net
 
     rec_path, pred_path = find_weights(weights)
@@ -127,4 +140,6 @@ def load_learned(weights: str | Path | None = None) -> tuple[Recognizer, Predict
     if threshold is None and tuned.is_file():
         threshold = json.loads(tuned.read_text())["threshold"]
     predictor, _ = load_prediction(pred_path)
-    return Recognizer(net, config, threshold), predictor
+    members = [predictor] + [load_prediction(p)[0].eval() for p in member_paths(pred_path.parent)]
+    check_members(members)
+    return LearnedNets(Recognizer(net, config, threshold), predictor, tuple(members))

@@ -13,6 +13,7 @@ import numpy as np
 
 from afford.planning.tree import Node, Recognised
 from afford.sim.affordances import Affordance
+from afford.sim.perturb import Perturbation, reset_perturbed
 from afford.sim.scene import ObjectSpec, Scene
 
 
@@ -55,10 +56,21 @@ class Execution:
     success: bool
 
 
-def execute_plan(scene: Scene, specs: list[ObjectSpec], plan, success) -> Execution:
+def execute_plan(
+    scene: Scene,
+    specs: list[ObjectSpec],
+    plan,
+    success,
+    perturbation: Perturbation | None = None,
+    rng: np.random.Generator | None = None,
+) -> Execution:
     """Reset to `specs`, execute `plan` open-loop as the paper does, judge `success` (a
-    predicate) on the final true state."""
-    scene.reset(specs)
+    predicate) on the final true state. With `perturbation` the start is first moved by a
+    draw from `rng` (`sim/perturb.py`): the plan meets a world a little unlike the one planned on."""
+    if perturbation is None:
+        scene.reset(specs)
+    else:
+        reset_perturbed(scene, specs, perturbation, rng if rng is not None else np.random.default_rng())
     images, executed, messages = [scene.observe()], [], []
     for aff in plan:
         r = scene.execute(aff)

@@ -16,8 +16,10 @@ from afford.planning.oracle import OracleModel, execute_plan
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchConfig, SearchResult, search
+from afford.planning.uncertain import EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
+from afford.sim.perturb import Perturbation
 from afford.sim.scene import Scene
 
 DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
@@ -43,6 +45,9 @@ class Outcome:
     total: int = 0
     truncated: bool = False  # the search's time limit stopped the tree early
     source: str = ""  # hybrid only: "symbolic" (a checked canonical plan) or "fallback" (the search)
+    spread: float | None = None  # ensemble only: the members' spread of eq. (5) at the plan's end
+    # `execute_perturbed`: the plan's success in each execution from a perturbed start.
+    perturbed: list[bool] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         fair = {}
@@ -67,6 +72,15 @@ class Outcome:
             }
             | ({"truncated": True} if self.truncated else {})
             | ({"source": self.source} if self.source else {})
+            | ({"spread": round(self.spread, 6)} if self.spread is not None else {})
+            | (
+                {
+                    "perturbed_executions": len(self.perturbed),
+                    "perturbed_success_rate": round(sum(self.perturbed) / len(self.perturbed), 4),
+                }
+                if self.perturbed
+                else {}
+            )
         )
 
 
@@ -96,7 +110,7 @@ def _nets(learned):
 def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
     learned = _nets(learned)
     scene.reset(task.scene)
-    model = LearnedModel(scene.observe(), *learned)
+    model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
     result = search(model, task.goal, task.max_steps, config)
     if config.optimise_turns:
         from afford.planning.angles import with_optimised_turns
@@ -105,13 +119,44 @@ def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome
     return _judge(task, "learned", result, scene)
 
 
+def _ensemble(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+    learned = _nets(learned)
+    scene.reset(task.scene)
+    model = EnsembleModel(scene.observe(), learned.recognizer, learned.members, config.risk)
+    result = search(model, task.goal, task.max_steps, config)
+    outcome = _judge(task, "ensemble", result, scene)
+    outcome.spread = result.nodes[result.best].spread
+    return outcome
+
+
+def execute_perturbed(
+    outcome: Outcome, task: Task, scene: Scene, perturbation: Perturbation, executions: int, seed: int = 0
+) -> list[bool]:
+    """The outcome's plan executed `executions` times, each from its own perturbed start
+    (`sim/perturb.py`, draws seeded by `seed` and the execution's number); recorded on the
+    outcome, and returned. Planners plan on the task's start; the world then differs."""
+    results = []
+    for k in range(executions):
+        rng = np.random.default_rng([seed, k])
+        ex = execute_plan(scene, task.scene, outcome.plan or (), task.success, perturbation, rng)
+        results.append(bool(ex.success))
+    outcome.perturbed = results
+    return results
+
+
 def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
     return _solve_symbolic(task, scene)
 
 
 def _hybrid(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
     learned = _nets(learned)
-    return _solve_hybrid(task, "hybrid", lambda start: LearnedModel(start, *learned), scene, config)
+    return _solve_hybrid(
+        task,
+        "hybrid",
+        lambda start: LearnedModel(start, learned.recognizer, learned.predictor),
+        scene,
+        config,
+    )
 
 
 def _hybrid_oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
@@ -238,6 +283,7 @@ PLANNER_REGISTRY = {
     "learned": _learned,
     "hybrid": _hybrid,  # canonical proposals checked by the learned nets (paper V)
     "hybrid-oracle": _hybrid_oracle,  # the same, checked by the simulator
+    "ensemble": _ensemble,  # the learned planner on an ensemble of prediction nets, risk-averse (paper V)
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
-USES_NETS = ("learned", "hybrid")  # the planners that load the trained nets
+USES_NETS = ("learned", "hybrid", "ensemble")  # the planners that load the trained nets

@@ -42,6 +42,9 @@ class Node:
     state: Any
     parent: int = -1
     loss: float = float("nan")
+    # An ensemble's world model (planning/uncertain.py): the spread of eq. (5) over its
+    # members, which `loss` then counts by the search's risk weight. 0 for one model.
+    spread: float = 0.0
 
     @property
     def depth(self) -> int:
@@ -65,7 +68,17 @@ class WorldModel(Protocol):
         cannot be carried out at all."""
 
 
+def score(model: WorldModel, goal: Goal, nodes: list[Node]) -> np.ndarray:
+    """Each node's plan score: eq. (5) on its image, or the model's own score where it has one
+    (an ensemble counts the spread of its members' outcomes)."""
+    own = getattr(model, "score", None)
+    if own is not None:
+        return own(goal, nodes)
+    return goal.loss(np.stack([n.image for n in nodes]))
+
+
 GUIDED_BUDGET = 2_000  # states a guided search grows unless told otherwise
+RISK = 1.0  # the ensemble planner's default weight on the spread of a plan's outcome
 
 
 @dataclass(frozen=True)
@@ -96,6 +109,9 @@ class SearchConfig:
     # The learned planner: optimise the turn angles of the best plan with turns by gradient
     # descent through the prediction net (planning/angles.py) and keep it when it is closer.
     optimise_turns: bool = False
+    # The ensemble planner (planning/uncertain.py): a plan scores eq. (5) averaged over the
+    # members plus this many standard deviations of it (risk-averse); 0 scores the mean alone.
+    risk: float = RISK
 
 
 class TreeTooLarge(ValueError):
@@ -153,7 +169,7 @@ class Growth:
         self.start = time.perf_counter()
         image, state = model.root()
         self.nodes = [Node((), image, state)]
-        self.nodes[0].loss = float(goal.loss(image[None])[0])
+        self.nodes[0].loss = float(score(model, goal, self.nodes)[0])
         self.expanded = 0
         self.truncated = False  # the time limit stopped a step
 
@@ -201,7 +217,7 @@ class Growth:
                     if out is not None
                 ]
                 if new:
-                    losses = self.goal.loss(np.stack([n.image for n in new]))
+                    losses = score(self.model, self.goal, new)
                     for n, loss in zip(new, losses, strict=True):
                         n.loss = float(loss)
                         made_here.append(len(nodes))

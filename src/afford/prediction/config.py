@@ -65,6 +65,11 @@ class PredictionConfig:
     threads: int = 2
     bf16: bool = False  # bfloat16 autocast in training (AVX-512 BF16 CPUs); measured in benchmarks/
     loader_workers: int = 1  # background processes building batches (0: in the training thread)
+    # The run's random stream (data order, augmentation): members of an ensemble differ by it.
+    seed: int = 0
+    # Train on a resample, with replacement, of the training sequences drawn from `seed`: the
+    # bootstrap that makes an ensemble's members disagree where the data is thin.
+    bootstrap: bool = False
 
     @property
     def latent_size(self) -> int:

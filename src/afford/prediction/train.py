@@ -97,7 +97,8 @@ def train(
     (`training/distributed.py`)."""
     world = join_world(device)
     torch.set_num_threads(rank_threads(config.threads, world))
-    torch.manual_seed(world.rank)  # each rank its own random stream; rank 0 is a lone run's
+    stream = config.seed * 1000 + world.rank  # each rank its own; rank 0 is a lone run's
+    torch.manual_seed(stream)
     data = Dataset(data_dir)
     augment = AugmentConfig(
         shift_px=config.shift_px,
@@ -106,7 +107,10 @@ def train(
         position_noise=config.position_noise,
         angle_noise=config.angle_noise,
     )
-    train_set = PredictionData(data, "train", config.max_steps, augment, seed=world.rank)
+    train_set = PredictionData(data, "train", config.max_steps, augment, seed=stream)
+    if config.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
+        draw = np.random.default_rng(config.seed).integers(len(train_set), size=len(train_set))
+        train_set.indices = [train_set.indices[k] for k in draw]
     val_set = PredictionData(data, "val", config.max_steps, random_start=False)
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)
@@ -127,7 +131,7 @@ def train(
         batch_size=rank_batch(config.batch_size, world),
         drop_last=True,
         collate_fn=collate_prediction,
-        **loader_order(None, len(train_set), world),
+        **loader_order(None, len(train_set), world, seed=config.seed),
         **workers,
     )
     net = PredictionNet(config).to(world.device)

@@ -91,7 +91,7 @@ def evaluate_shipped(data_dir: str | Path, out: Path, pictures: int = 6) -> dict
     tuned: a user checks the shipped net on their own data)."""
     from afford.planning.learned import load_learned
 
-    recognizer, _ = load_learned()
+    recognizer = load_learned().recognizer
     result = {"run": "shipped", "threshold": recognizer.threshold}
     return result | table1(recognizer, Dataset(data_dir), out / "detections", pictures)
 

@@ -1,0 +1,106 @@
+"""Is the ensemble's spread calibrated? A larger spread should mean a larger error (paper V).
+
+    python benchmarks/ensemble_calibration.py --data data/cpu [--weights DIR] [--runs 300]
+        [--out out/calibration] [--json]
+
+Every member rolls out test runs from their first state through all their executions (as
+Table 2 is measured). Per predicted state: the members' mean per-pixel spread, and the
+absolute RGBD error of their mean image against the true state. Prints Spearman's rank
+correlation of the two over the states (and over sampled pixels), the error in five
+equal-count bins of spread, and the same per prediction step; writes OUT/calibration.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--data", required=True, metavar="DIR")
+    ap.add_argument(
+        "--weights", metavar="DIR", help="a weights folder with ensemble/ (default: the shipped one)"
+    )
+    ap.add_argument("--runs", type=int, default=300, help="test runs rolled out (default 300)")
+    ap.add_argument("--out", default="out/calibration", metavar="DIR")
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import torch
+
+    from afford.data.format import Dataset
+    from afford.planning.learned import load_learned
+    from afford.prediction.ensemble import calibrate, spearman
+
+    members = load_learned(args.weights).members
+    torch.set_num_threads(members[0].config.threads)
+    cal = calibrate(members, Dataset(args.data), "test", limit=args.runs)
+    report = {
+        "members": len(members),
+        "states": len(cal.spread),
+        "rank_correlation": round(cal.rank_correlation(), 4),
+        "pixel_rank_correlation": round(spearman(cal.pixel_spread, cal.pixel_error), 4),
+        "by_spread": cal.by_spread(5),
+        "by_step": {
+            str(s): {
+                "states": int((cal.step == s).sum()),
+                "spread": float(cal.spread[cal.step == s].mean()),
+                "error": float(cal.error[cal.step == s].mean()),
+                "rank_correlation": round(spearman(cal.spread[cal.step == s], cal.error[cal.step == s]), 4),
+            }
+            for s in sorted(set(cal.step.tolist()))
+        },
+    }
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    for s in sorted(set(cal.step.tolist())):
+        pick = cal.step == s
+        a.scatter(cal.spread[pick], cal.error[pick], s=6, alpha=0.5, label=f"step {s}")
+    bins = report["by_spread"]
+    a.plot([x["spread"] for x in bins], [x["error"] for x in bins], "k-o", label="5 bins of spread")
+    a.set(
+        xlabel="members' spread (mean over the image)",
+        ylabel="error of their mean (mean abs RGBD)",
+        title=f"per predicted state: Spearman {report['rank_correlation']:.2f}",
+    )
+    a.legend(fontsize=7)
+    a.grid(alpha=0.3)
+    order = np.argsort(cal.pixel_spread)
+    parts = np.array_split(order, 10)
+    b.plot([cal.pixel_spread[p].mean() for p in parts], [cal.pixel_error[p].mean() for p in parts], "k-o")
+    b.set(
+        xlabel="members' spread at a pixel",
+        ylabel="error of their mean there",
+        title=f"per pixel, 10 bins: Spearman {report['pixel_rank_correlation']:.2f}",
+    )
+    b.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "calibration.png", dpi=110)
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return
+    print(f"{report['members']} members, {report['states']} predicted test states")
+    print(
+        f"Spearman(spread, error): {report['rank_correlation']:.3f} over states, "
+        f"{report['pixel_rank_correlation']:.3f} over pixels"
+    )
+    for x in bins:
+        print(f"  spread {x['spread']:.4f}: error {x['error']:.4f} ({x['states']} states)")
+    for s, x in report["by_step"].items():
+        print(
+            f"  step {s}: spread {x['spread']:.4f} error {x['error']:.4f} "
+            f"Spearman {x['rank_correlation']:.3f}"
+        )
+    print(f"picture: {out / 'calibration.png'}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,122 @@
+"""Planning with an ensemble of prediction nets: risk-averse plan scores (paper V).
+
+The ensemble world model grows the same tree as the learned one (recognition on the real
+start and on predicted states, prediction by EM*D), but every member of the ensemble rolls
+out its own chain, so each state of the tree is K predicted images. Recognition runs on their
+mean; eq. (5) is computed on each, and a plan scores the members' mean loss plus `risk` times
+its standard deviation over the members: of two plans predicted equally close to the goal,
+the one the members agree on wins. For a negative goal (eq. (4) takes the greatest loss) the
+spread counts the other way: a state sure to be far from the goal beats one that may not be.
+With risk 0 the score is the members' mean loss, the ensemble without caution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from afford.data.format import encode_affordance
+from afford.planning.goal import Goal
+from afford.planning.tree import Node, Recognised
+from afford.prediction.ensemble import spread
+from afford.prediction.model import PredictionNet
+from afford.recognition.infer import Recognizer
+from afford.sim.affordances import Affordance
+
+
+class EnsembleError(ValueError):
+    """An ensemble planner without an ensemble; the message says where members go."""
+
+
+@dataclass
+class EnsembleState:
+    """Each member's own state, stacked on a first axis of K."""
+
+    latent: torch.Tensor
+    memory: torch.Tensor
+    images: np.ndarray  # (K, H, W, C): each member's predicted image
+
+    @property
+    def pixel_spread(self) -> np.ndarray:
+        """(H, W): the members' per-pixel spread (`prediction.ensemble.spread`)."""
+        return spread(self.images)
+
+
+def risk_score(losses: np.ndarray, risk: float, negative: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(score, spread) per state from the members' eq. (5) losses (K, B): the mean plus (a
+    positive goal) or minus (a negative one) `risk` standard deviations."""
+    mean, std = losses.mean(axis=0), losses.std(axis=0)
+    return mean + (-risk if negative else risk) * std, std
+
+
+class EnsembleModel:
+    """A `WorldModel` of the recognizer and K prediction nets, from the real start image."""
+
+    def __init__(
+        self, image: np.ndarray, recognizer: Recognizer, members: tuple[PredictionNet, ...], risk: float
+    ):
+        if len(members) < 2:
+            raise EnsembleError(
+                f"an ensemble needs at least 2 prediction nets, not {len(members)}: put the members in the "
+                "weights folder's ensemble/ (`afford export --member`), beside its prediction net"
+            )
+        self.image = np.asarray(image, dtype=np.float32)
+        self.recognizer = recognizer
+        self.members = tuple(m.eval() for m in members)
+        self.risk = risk
+        self.p_steps = 0
+
+    @torch.no_grad()
+    def root(self):
+        x = self._tensor(self.image[None])
+        states = [m.encode(x) for m in self.members]
+        latent = torch.stack([s[0][0] for s in states])
+        memory = torch.stack([s[1][0] for s in states])
+        images = np.repeat(self.image[None], len(self.members), axis=0)
+        return self.image, EnsembleState(latent, memory, images)
+
+    def recognise(self, nodes: list[Node]) -> list[Recognised]:
+        detections = self.recognizer(np.stack([n.image for n in nodes]))
+        return [[(d.affordance, d.score) for d in dets] for dets in detections]
+
+    @torch.no_grad()
+    def predict(self, parents: list[Node], actions: list[Affordance]):
+        rows = torch.from_numpy(np.stack([encode_affordance(a) for a in actions]))
+        out_latent, out_memory, out_images = [], [], []
+        for k, member in enumerate(self.members):
+            latent = torch.stack([p.state.latent[k] for p in parents])
+            memory = torch.stack([p.state.memory[k] for p in parents])
+            image = self._tensor(np.stack([p.state.images[k] for p in parents]))
+            latent, memory, image = member.step(latent, memory, image, rows)
+            out_latent.append(latent)
+            out_memory.append(memory)
+            out_images.append(image.permute(0, 2, 3, 1).numpy())
+        self.p_steps += len(parents) * len(self.members)
+        images = np.stack(out_images)  # (K, B, H, W, C)
+        return [
+            (
+                images[:, j].mean(axis=0),
+                EnsembleState(
+                    torch.stack([t[j] for t in out_latent]),
+                    torch.stack([t[j] for t in out_memory]),
+                    images[:, j],
+                ),
+            )
+            for j in range(len(parents))
+        ]
+
+    def score(self, goal: Goal, nodes: list[Node]) -> np.ndarray:
+        """Eq. (5) per member, then `risk_score`; each node's spread is recorded on it."""
+        k = len(self.members)
+        stacked = np.concatenate([n.state.images for n in nodes])  # (B*K, H, W, C), node-major
+        losses = goal.loss(stacked).reshape(len(nodes), k).T
+        scores, spreads = risk_score(losses, self.risk, goal.negative)
+        for n, s in zip(nodes, spreads, strict=True):
+            n.spread = float(s)
+        return scores
+
+    @staticmethod
+    def _tensor(images: np.ndarray) -> torch.Tensor:
+        return torch.from_numpy(np.ascontiguousarray(images, dtype=np.float32)).permute(0, 3, 1, 2)

@@ -1,0 +1,174 @@
+"""Uncertain outcomes (paper V): the ensemble's spread, risk-averse scores, perturbed executions."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from afford.cli.main import main
+from afford.data.format import Dataset
+from afford.planning.goal import Goal
+from afford.planning.tree import Node, SearchConfig, search
+from afford.planning.uncertain import EnsembleError, EnsembleModel, risk_score
+from afford.prediction.config import PRESETS as PRED
+from afford.prediction.ensemble import calibrate, spread
+from afford.prediction.model import PredictionNet
+from afford.recognition.config import PRESETS as REC
+from afford.recognition.infer import Recognizer
+from afford.recognition.model import RecognitionNet
+from afford.sim.affordances import Affordance
+from afford.sim.perturb import Perturbation, piles, reset_perturbed
+from afford.sim.scene import ObjectSpec
+
+SPECS = [ObjectSpec.upright("cup", 0.05, 0.3), ObjectSpec.upright("block", -0.05, 0.22)]
+GRASP = Affordance("grasp", (0.05, 0.3, 0.0425), 0.0, True)
+# A pile: the cup on the block on a support, and a ball on its own.
+PILE = [
+    ObjectSpec.upright("support", 0.0, 0.3),
+    ObjectSpec.upright("block", 0.0, 0.3, z=0.06),
+    ObjectSpec.upright("cup", 0.0, 0.3, z=0.11),
+    ObjectSpec.upright("ball", -0.15, 0.2),
+]
+
+
+def _nets(k: int, same: bool):
+    torch.manual_seed(0)
+    first = PredictionNet(PRED["tiny"])
+    members = [first]
+    for seed in range(1, k):
+        if same:
+            members.append(copy.deepcopy(first))
+        else:
+            torch.manual_seed(seed)
+            members.append(PredictionNet(PRED["tiny"]))
+    recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.0)
+    return recognizer, tuple(members)
+
+
+def _predicted(scene, same: bool):
+    recognizer, members = _nets(3, same)
+    scene.reset(SPECS)
+    model = EnsembleModel(scene.observe(), recognizer, members, risk=1.0)
+    image, state = model.root()
+    ((child, child_state),) = model.predict([Node((), image, state)], [GRASP])
+    return model, Node((GRASP,), child, child_state)
+
+
+def test_the_spread_is_zero_when_the_members_agree(scene):
+    model, node = _predicted(scene, same=True)
+    assert np.allclose(node.state.pixel_spread, 0.0, atol=1e-6)
+    goal = Goal(np.full((8, 8, 4), 0.5, np.float32))
+    score = model.score(goal, [node])
+    assert node.spread == pytest.approx(0.0, abs=1e-7)
+    assert score[0] == pytest.approx(goal.loss(node.image[None])[0], rel=1e-5)  # the mean: nothing added
+
+
+def test_members_that_differ_spread_and_their_mean_is_the_node_image(scene):
+    model, node = _predicted(scene, same=False)
+    assert node.state.pixel_spread.max() > 1e-3
+    assert np.allclose(node.image, node.state.images.mean(axis=0), atol=1e-6)
+    assert np.allclose(spread(node.state.images), node.state.images.std(axis=0).mean(axis=-1))
+
+
+def test_risk_prefers_the_outcome_the_members_agree_on():
+    # Two plans, each scored by 3 members: the same mean loss, one of them spread out.
+    losses = np.array([[0.10, 0.02], [0.10, 0.10], [0.10, 0.18]])
+    averse, spreads = risk_score(losses, risk=1.0, negative=False)
+    assert np.argmin(averse) == 0 and spreads[0] == pytest.approx(0.0, abs=1e-12) and spreads[1] > 0.06
+    plain, _ = risk_score(losses, risk=0.0, negative=False)
+    assert np.allclose(plain, 0.10)
+    # A negative goal keeps the largest loss: the spread counts against that instead.
+    negative, _ = risk_score(losses, risk=1.0, negative=True)
+    assert np.argmax(negative) == 0
+
+
+def test_the_ensemble_search_scores_every_state_and_needs_two_members(scene):
+    recognizer, members = _nets(2, same=False)
+    scene.reset(SPECS)
+    start = scene.observe()
+    goal = Goal(start[40:60, 40:60])
+    result = search(
+        EnsembleModel(start, recognizer, members, 1.0), goal, 1, SearchConfig(progress=False, budget=12)
+    )
+    assert len(result.nodes) > 1 and all(np.isfinite(n.loss) for n in result.nodes)
+    assert all(n.spread >= 0 for n in result.nodes) and any(n.spread > 0 for n in result.nodes[1:])
+    with pytest.raises(EnsembleError, match="at least 2"):
+        EnsembleModel(start, recognizer, members[:1], 1.0)
+
+
+def test_a_pile_is_perturbed_as_one_and_the_draws_are_seeded(scene):
+    assert piles(scene, PILE) == [0, 0, 0, 3]
+    big = Perturbation(position=0.01, yaw=5.0)
+    a = big.draw(PILE, [0, 0, 0, 3], np.random.default_rng(1))
+    b = big.draw(PILE, [0, 0, 0, 3], np.random.default_rng(1))
+    assert a == b
+    moved = np.array(a[0].pos) - np.array(PILE[0].pos)
+    assert np.linalg.norm(moved[:2]) > 1e-4 and moved[2] == 0.0  # shifted on the table, not lifted
+    for i in (1, 2):  # what rests on the support keeps its place on it (centred piles)
+        assert np.allclose(np.array(a[i].pos[:2]) - np.array(a[0].pos[:2]), 0.0, atol=1e-9)
+    assert not np.allclose(a[3].pos, PILE[3].pos)  # the ball has its own draw
+    none = Perturbation(0.0, 0.0).draw(PILE, [0, 0, 0, 3], np.random.default_rng(1))
+    assert [s.pos for s in none] == [s.pos for s in PILE]
+
+
+def test_a_perturbed_start_is_a_valid_settled_scene(scene):
+    drawn = reset_perturbed(scene, PILE, Perturbation(0.005, 3.0), np.random.default_rng(2))
+    cup = scene.object("cup0")
+    assert cup.present and np.linalg.norm(cup.pos[:2] - np.array(drawn[2].pos[:2])) < 0.005
+    with pytest.raises(ValueError, match=">= 0"):
+        Perturbation(-0.01)
+
+
+def test_calibration_has_one_spread_and_error_per_predicted_state(small_dataset):
+    _, members = _nets(2, same=False)
+    cal = calibrate(members, Dataset(small_dataset), "train", batch=4)
+    assert len(cal.spread) == len(cal.error) == len(cal.step) > 0
+    assert np.all(cal.spread > 0) and np.all(cal.error >= 0)
+    assert -1.0 <= cal.rank_correlation() <= 1.0
+    assert sum(b["states"] for b in cal.by_spread(2)) == len(cal.spread)
+
+
+def test_bad_perturb_and_missing_members_are_one_line_errors(tmp_path, capsys):
+    task = "tasks/uncertain/01-cup-near-a-tipping-edge.json"
+    assert main(["plan", "--task", task, "--perturb", "a,b", "--out", str(tmp_path)]) == 2
+    assert "--perturb 'a,b'" in capsys.readouterr().err
+    assert (
+        main(["plan", "--task", task, "--perturb", "0.005", "--executions", "0", "--out", str(tmp_path)]) == 2
+    )
+    assert "--executions" in capsys.readouterr().err
+
+
+def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, capsys):
+    from dataclasses import asdict
+
+    from afford.planning.learned import load_learned
+    from afford.training.checkpoint import save_checkpoint
+
+    torch.manual_seed(0)
+    runs = tmp_path / "runs"
+    for name, net, config, kind in (
+        ("recognition", RecognitionNet(REC["tiny"]), REC["tiny"], "recognition"),
+        ("prediction", PredictionNet(PRED["tiny"]), PRED["tiny"], "prediction"),
+        ("member", PredictionNet(PRED["tiny"]), PRED["tiny"], "prediction"),
+    ):
+        save_checkpoint(runs / name / "best.safetensors", net, kind, asdict(config), 1)
+    pair = ["export", "--recognition", str(runs / "recognition"), "--prediction", str(runs / "prediction")]
+    assert main([*pair, "--out", str(tmp_path / "alone")]) == 0
+    assert main([*pair, "--member", str(runs / "member"), "--out", str(tmp_path / "two")]) == 0
+    assert (tmp_path / "two" / "ensemble" / "prediction-1.safetensors").is_file()
+    assert len(load_learned(tmp_path / "two").members) == 2
+    capsys.readouterr()
+    task = "tasks/uncertain/01-cup-near-a-tipping-edge.json"
+    plan = ["plan", "--task", task, "--planner", "ensemble", "--out", str(tmp_path / "out")]
+    assert main([*plan, "--weights", str(tmp_path / "alone")]) == 2
+    assert "ensemble/" in capsys.readouterr().err
+    code = main(
+        [*plan, "--weights", str(tmp_path / "two"), "--perturb", "0.005", "--executions", "2", "--json"]
+    )
+    record = json.loads(capsys.readouterr().out)
+    assert code in (0, 1) and record["planner"] == "ensemble" and record["spread"] >= 0
+    assert record["perturbed_executions"] == 2 and 0 <= record["perturbed_success_rate"] <= 1

@@ -172,3 +172,25 @@ def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, cap
     record = json.loads(capsys.readouterr().out)
     assert code in (0, 1) and record["planner"] == "ensemble" and record["spread"] >= 0
     assert record["perturbed_executions"] == 2 and 0 <= record["perturbed_success_rate"] <= 1
+
+
+def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(scene):
+    """The premise of tasks/uncertain/01: the cup placed at the block's right end stays up as
+    planned, but lands too far out when the pile stands 6 mm left of where the plan aimed."""
+    from afford.planning.predicates import rests_on
+    from afford.planning.tasks import load_task
+
+    task = load_task("tasks/uncertain/01-cup-near-a-tipping-edge.json", scene)
+    scene.reset(task.scene)
+    grasp = next(a for a in scene.affordances() if a.type == "grasp")
+    scene.execute(grasp)
+    end = next(a for a in scene.affordances() if a.type == "place" and a.position[0] > 0.08)
+    shifted = [
+        s if s.kind == "cup" else ObjectSpec(s.kind, (s.pos[0] - 0.006, *s.pos[1:]), s.quat)
+        for s in task.scene
+    ]
+    for start, holds in ((task.scene, True), (shifted, False)):
+        scene.reset(start)
+        assert scene.execute(grasp).executed and scene.execute(end).executed
+        assert rests_on(scene, "cup0", "block0") == holds
+        assert rests_on(scene, "block0", "support0") == holds

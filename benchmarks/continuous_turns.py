@@ -7,8 +7,10 @@ For every task of the folder (goals that a quarter turn cannot reach), plans wit
 planner twice: as the paper does (the search tries +90 and -90 for every turn) and with
 `--optimise-turns` (the best plan with turns, its angles then found by gradient descent on
 eq. (5) through the prediction net). Each plan is executed in the simulator and judged.
-Prints both outcomes, the angle found and the planning time, and writes OUT/curves.png: eq.
-(5) against the descent step, one line per restart, one panel per task. `--weights` should
+Prints both outcomes, the angle found and the planning time, and writes OUT/curves.png, one
+column per task: above, eq. (5) against the descent step, one line per restart; below, eq.
+(5) of the best plan with a turn at every angle from -180 to 180, predicted by the net and
+rendered after executing it in the simulator, the optimised angle marked. `--weights` should
 hold a prediction net trained on continuous turns (`afford generate --turn-angles
 continuous`, then `afford train prediction ... --init` the shipped run).
 """
@@ -45,7 +47,7 @@ def main() -> None:
     scene = Scene()
     files = sorted(Path(args.tasks).glob("*.json"))
     plain = SearchConfig(progress=False)
-    rows, curves = [], {}
+    rows, curves, sweeps = [], {}, {}
     for f in files:
         task = load_task(f, scene)
         quarter = solve(task, "learned", scene, plain, learned)
@@ -65,14 +67,27 @@ def main() -> None:
         with_turn = [n for n in tree.nodes if any(a.turn for a in n.plan)]
         if with_turn:
             best = min(with_turn, key=lambda n: n.loss)
-            curves[task.name] = optimise_turns(model.net, model.image, best.plan, task.goal).curves
+            found = optimise_turns(model.net, model.image, best.plan, task.goal)
+            curves[task.name] = found.curves
+            sweeps[task.name] = _sweep(model, scene, task, best.plan) + (
+                [a.turn for a in found.plan if a.turn],
+            )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    fig, axes = plt.subplots(1, max(len(curves), 1), figsize=(4.5 * max(len(curves), 1), 3.4), squeeze=False)
+    cols = max(len(curves), 1)
+    fig, axes = plt.subplots(2, cols, figsize=(4.5 * cols, 6.6), squeeze=False)
     for ax, (name, runs) in zip(axes[0], curves.items(), strict=False):
         for k, curve in enumerate(runs):
             ax.plot(curve, label=f"restart {k + 1}")
         ax.set(title=name, xlabel="gradient step", ylabel="eq. (5), predicted")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    for ax, (angles, predicted, true, found) in zip(axes[1], sweeps.values(), strict=False):
+        ax.plot(angles, predicted, label="predicted by the net")
+        ax.plot(angles, true, label="executed in the simulator")
+        for k, a in enumerate(found):
+            ax.axvline(a, color="k", ls=":", label="optimised angle" if k == 0 else None)
+        ax.set(xlabel="turn angle (every turn of the plan), degrees", ylabel="eq. (5)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
@@ -87,6 +102,33 @@ def main() -> None:
             f"optimised: {'solved' if o['solved'] else 'fails'} turns {o['turns']} ({o['seconds']:.1f} s)"
         )
     print(f"curves: {out / 'curves.png'}")
+
+
+SWEEP = range(-180, 181, 10)  # the angles of the picture's lower row
+
+
+def _sweep(model, scene, task, plan):
+    """Eq. (5) of the plan's last state with every turn at each angle of SWEEP: predicted
+    through the net, and rendered after executing it in the simulator."""
+    import numpy as np
+    import torch
+
+    from afford.data.format import Col, encode_affordance
+    from afford.planning.oracle import execute_plan
+
+    turns = [i for i, a in enumerate(plan) if a.turn]
+    image = torch.from_numpy(np.ascontiguousarray(model.image.transpose(2, 0, 1)))[None]
+    rows = torch.from_numpy(np.stack([encode_affordance(a) for a in plan]))[None]
+    predicted, true = [], []
+    for angle in SWEEP:
+        actions = rows.clone()
+        actions[0, turns, Col.TURN] = float(angle) or 1e-3
+        with torch.no_grad():
+            predicted.append(float(task.goal.loss_torch(model.net.rollout(image, actions)[:, -1])[0]))
+        turned = tuple(a.with_turn(float(angle) or 1e-3) if a.turn else a for a in plan)
+        end = execute_plan(scene, task.scene, turned, task.success).images[-1]
+        true.append(float(task.goal.loss(end[None])[0]))
+    return list(SWEEP), predicted, true
 
 
 if __name__ == "__main__":

@@ -16,6 +16,8 @@ import argparse
 import json
 from pathlib import Path
 
+DISAGREE = 1e-3  # a pixel's spread above which the members count as disagreeing there
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -42,11 +44,16 @@ def main() -> None:
     members = load_learned(args.weights).members
     torch.set_num_threads(members[0].config.threads)
     cal = calibrate(members, Dataset(args.data), "test", limit=args.runs)
+    live = cal.pixel_spread > DISAGREE
     report = {
         "members": len(members),
         "states": len(cal.spread),
         "rank_correlation": round(cal.rank_correlation(), 4),
         "pixel_rank_correlation": round(spearman(cal.pixel_spread, cal.pixel_error), 4),
+        "live_pixel_rank_correlation": round(spearman(cal.pixel_spread[live], cal.pixel_error[live]), 4),
+        "live_pixels": int(live.sum()),
+        "pixels": len(cal.pixel_spread),
+        "error_over_spread": round(float(cal.error.mean() / cal.spread.mean()), 2),
         "by_spread": cal.by_spread(5),
         "by_step": {
             str(s): {
@@ -73,15 +80,18 @@ def main() -> None:
     )
     a.legend(fontsize=7)
     a.grid(alpha=0.3)
-    order = np.argsort(cal.pixel_spread)
+    # Most pixels are background that every member leaves alone: the bins are of the pixels
+    # where the members disagree at all.
+    order = np.flatnonzero(live)[np.argsort(cal.pixel_spread[live])]
     parts = np.array_split(order, 10)
-    b.plot([cal.pixel_spread[p].mean() for p in parts], [cal.pixel_error[p].mean() for p in parts], "k-o")
+    b.loglog([cal.pixel_spread[p].mean() for p in parts], [cal.pixel_error[p].mean() for p in parts], "k-o")
     b.set(
         xlabel="members' spread at a pixel",
         ylabel="error of their mean there",
-        title=f"per pixel, 10 bins: Spearman {report['pixel_rank_correlation']:.2f}",
+        title=f"pixels with spread > {DISAGREE:g}, 10 bins: "
+        f"Spearman {report['live_pixel_rank_correlation']:.2f}",
     )
-    b.grid(alpha=0.3)
+    b.grid(alpha=0.3, which="both")
     fig.tight_layout()
     fig.savefig(out / "calibration.png", dpi=110)
     if args.json:
@@ -90,8 +100,11 @@ def main() -> None:
     print(f"{report['members']} members, {report['states']} predicted test states")
     print(
         f"Spearman(spread, error): {report['rank_correlation']:.3f} over states, "
-        f"{report['pixel_rank_correlation']:.3f} over pixels"
+        f"{report['pixel_rank_correlation']:.3f} over pixels, {report['live_pixel_rank_correlation']:.3f} "
+        f"over the {report['live_pixels']:,} of {report['pixels']:,} sampled pixels where they disagree "
+        f"(spread > {DISAGREE:g})"
     )
+    print(f"mean error / mean spread: {report['error_over_spread']:.1f}")
     for x in bins:
         print(f"  spread {x['spread']:.4f}: error {x['error']:.4f} ({x['states']} states)")
     for s, x in report["by_step"].items():

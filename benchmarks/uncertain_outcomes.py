@@ -102,7 +102,7 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     cols = max(len(s) for _, s in panels)
-    fig, axes = plt.subplots(2 * len(panels), cols, figsize=(2.6 * cols, 5.4 * len(panels)), squeeze=False)
+    fig, axes = plt.subplots(2 * len(panels), cols, figsize=(2.9 * cols, 5.6 * len(panels)), squeeze=False)
     top = max(float(n.state.pixel_spread.max()) for _, s in panels for n, _ in s)
     for t, (name, shown) in enumerate(panels):
         for c in range(cols):
@@ -120,9 +120,7 @@ def main() -> None:
                 loc="left",
             )
             im = axes[2 * t + 1, c].imshow(n.state.pixel_spread, cmap="magma", vmin=0, vmax=top)
-            axes[2 * t + 1, c].set_title(
-                f"per-pixel spread; {rate:.0%} of perturbed runs succeed", fontsize=7
-            )
+            axes[2 * t + 1, c].set_title(f"spread; {rate:.0%} succeed perturbed", fontsize=7)
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.3, label="std over members (mean over RGBD)")
     fig.savefig(out / "spread.png", dpi=100)
     if args.json:

@@ -194,3 +194,16 @@ def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(s
         assert scene.execute(grasp).executed and scene.execute(end).executed
         assert rests_on(scene, "cup0", "block0") == holds
         assert rests_on(scene, "block0", "support0") == holds
+
+
+def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scene):
+    from afford.planning.learned import load_learned
+    from afford.planning.run import solve
+    from afford.planning.tasks import load_task
+
+    nets = load_learned()
+    assert len(nets.members) == 4 and nets.members[0] is nets.predictor
+    task = load_task("tasks/uncertain/02-ball-near-a-tipping-edge.json", scene)
+    o = solve(task, "ensemble", scene, SearchConfig(progress=False), nets)
+    assert o.success and o.plan[-1].type == "place"  # unperturbed, the end place holds
+    assert 0 < o.spread < o.loss

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from afford.cli.main import main
@@ -121,3 +122,21 @@ def test_keep_freed_memory_applies_on_glibc():
     applied = keep_freed_memory()
     if platform.system() == "Linux" and platform.libc_ver()[0] == "glibc":
         assert applied
+
+
+def test_turn_sampler_draws_the_asked_share_from_sequences_with_a_turn(small_dataset):
+    from afford.data.format import Col, Dataset
+    from afford.data.torch_data import PredictionData
+    from afford.prediction.train import turn_sampler
+    from afford.sim.affordances import TYPES
+
+    data = Dataset(small_dataset)
+    indices = PredictionData(data, "train", 4).indices
+    with_turn = np.array(
+        [bool(np.any(data.sequence(i).actions[:, Col.TYPE] == TYPES.index("turn"))) for i in indices]
+    )
+    assert with_turn.any() and not with_turn.all()  # the fixture's sequences have both kinds
+    weights = turn_sampler(data, indices, 0.7, seed=0).weights.numpy()
+    assert weights[with_turn].sum() == pytest.approx(0.7) and weights.sum() == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="between 0 and 1"):
+        turn_sampler(data, indices, 1.5, seed=0)

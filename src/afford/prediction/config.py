@@ -70,6 +70,9 @@ class PredictionConfig:
     # Train on a resample, with replacement, of the training sequences drawn from `seed`: the
     # bootstrap that makes an ensemble's members disagree where the data is thin.
     bootstrap: bool = False
+    # The share of training runs drawn from sequences with a turn (0: as the data comes, about
+    # a third with turns): more turn examples for P^turn, for continuous turn angles (paper V).
+    turn_fraction: float = 0.0
 
     @property
     def latent_size(self) -> int:

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import torch
 from torch import nn
-from torch.utils.data import DataLoader
+from torch.utils.data import DataLoader, WeightedRandomSampler
 
 from afford.data.augment import AugmentConfig
-from afford.data.format import Dataset
+from afford.data.format import Col, Dataset
 from afford.data.torch_data import PredictionData, collate_prediction, worker_init
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
@@ -75,6 +75,33 @@ def sequence_loss(net: nn.Module, images: torch.Tensor, actions: torch.Tensor, s
     return (err * mask).sum() / mask.sum()
 
 
+def turn_sampler(data: Dataset, indices: list[int], fraction: float, seed: int) -> WeightedRandomSampler:
+    """Draws training runs so that `fraction` of them come from sequences holding a turn (read
+    from the shards' small arrays, no images)."""
+    from afford.data.format import shard_path, shard_summary
+    from afford.sim.affordances import TYPES
+
+    if not 0 < fraction < 1:
+        raise ValueError(f"turn_fraction must lie between 0 and 1, not {fraction}")
+    turn = TYPES.index("turn")
+    has_turn = {}
+    for k in range(data.manifest.n_shards):
+        z = shard_summary(shard_path(data.root, k))
+        ends = np.cumsum(z["state_count"] - 1)
+        for i, stop, n in zip(z["index"], ends, z["state_count"] - 1, strict=True):
+            has_turn[int(i)] = bool(np.any(z["actions"][stop - n : stop, Col.TYPE] == turn))
+    with_turn = np.array([has_turn[i] for i in indices])
+    if not with_turn.any() or with_turn.all():
+        raise ValueError("turn_fraction needs training sequences both with and without a turn")
+    weights = np.where(with_turn, fraction / with_turn.sum(), (1 - fraction) / (~with_turn).sum())
+    return WeightedRandomSampler(
+        torch.from_numpy(weights),
+        len(indices),
+        replacement=True,
+        generator=torch.Generator().manual_seed(seed),
+    )
+
+
 def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
     if config.optimizer == "signsgd":
         return SignSGD(net.parameters(), lr=config.lr)
@@ -111,6 +138,9 @@ def train(
     if config.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
         draw = np.random.default_rng(config.seed).integers(len(train_set), size=len(train_set))
         train_set.indices = [train_set.indices[k] for k in draw]
+    sampler = (
+        turn_sampler(data, train_set.indices, config.turn_fraction, stream) if config.turn_fraction else None
+    )
     val_set = PredictionData(data, "val", config.max_steps, random_start=False)
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)
@@ -131,7 +161,7 @@ def train(
         batch_size=rank_batch(config.batch_size, world),
         drop_last=True,
         collate_fn=collate_prediction,
-        **loader_order(None, len(train_set), world, seed=config.seed),
+        **loader_order(sampler, len(train_set), world, seed=config.seed),
         **workers,
     )
     net = PredictionNet(config).to(world.device)

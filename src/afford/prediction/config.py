@@ -71,7 +71,7 @@ class PredictionConfig:
     # bootstrap that makes an ensemble's members disagree where the data is thin.
     bootstrap: bool = False
     # The share of training runs drawn from sequences with a turn (0: as the data comes, about
-    # a third with turns): more turn examples for P^turn, for continuous turn angles (paper V).
+    # a quarter with turns): more turn examples for P^turn, for continuous turn angles (paper V).
     turn_fraction: float = 0.0
 
     @property

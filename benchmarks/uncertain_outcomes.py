@@ -44,8 +44,7 @@ def main() -> None:
     import numpy as np
 
     from afford.planning.learned import load_learned
-    from afford.planning.oracle import execute_plan
-    from afford.planning.run import execute_perturbed, solve
+    from afford.planning.run import execute_perturbed, perturbed_successes, solve
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig, search
     from afford.planning.uncertain import EnsembleModel
@@ -89,12 +88,7 @@ def main() -> None:
             if key in seen:
                 continue
             seen.add(key)
-            wins = [
-                execute_plan(
-                    scene, task.scene, n.plan, task.success, perturbation, np.random.default_rng([0, k])
-                ).success
-                for k in range(args.executions)
-            ]
+            wins = perturbed_successes(n.plan, task, scene, perturbation, args.executions)
             shown.append((n, float(np.mean(wins))))
             if len(shown) == CANDIDATES:
                 break

@@ -70,12 +70,11 @@ class LearnedModel:
 
     @torch.no_grad()
     def root(self):
-        latent, memory = self.net.encode(self._tensor([self.image]))
+        latent, memory = self.net.encode(to_chw(self.image[None]))
         return self.image, LatentState(latent[0], memory[0])
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
-        detections = self.recognizer(np.stack([n.image for n in nodes]))
-        return [[(d.affordance, d.score) for d in dets] for dets in detections]
+        return recognise_nodes(self.recognizer, nodes)
 
     @torch.no_grad()
     def predict(self, parents: list[Node], actions: list[Affordance]):
@@ -84,7 +83,7 @@ class LearnedModel:
         rows = torch.from_numpy(np.stack([encode_affordance(a) for a in actions]))
         latent = torch.stack([p.state.latent for p in parents])
         memory = torch.stack([p.state.memory for p in parents])
-        image = self._tensor([p.image for p in parents])
+        image = to_chw(np.stack([p.image for p in parents]))
         latent, memory, image = self.net.step(latent, memory, image, rows)
         self.p_steps += len(parents)
         images = image.permute(0, 2, 3, 1).numpy()
@@ -98,7 +97,7 @@ class LearnedModel:
         for depth, ks in by_depth.items():
             plans = [list(parents[k].plan) + [actions[k]] for k in ks]
             rows = torch.from_numpy(np.stack([[encode_affordance(a) for a in plan] for plan in plans]))
-            root = self._tensor([self.image] * len(ks))
+            root = to_chw(np.stack([self.image] * len(ks)))
             latent, memory = self.net.encode(root)
             image = root
             for i in range(depth + 1):
@@ -109,9 +108,16 @@ class LearnedModel:
                 results[k] = (images[j], LatentState(latent[j], memory[j]))
         return [results[k] for k in range(len(parents))]
 
-    @staticmethod
-    def _tensor(images) -> torch.Tensor:
-        return torch.from_numpy(np.ascontiguousarray(np.stack(images), dtype=np.float32)).permute(0, 3, 1, 2)
+
+def recognise_nodes(recognizer: Recognizer, nodes: list[Node]) -> list[Recognised]:
+    """The recognizer on each node's image: its affordances with their confidences."""
+    detections = recognizer(np.stack([n.image for n in nodes]))
+    return [[(d.affordance, d.score) for d in dets] for dets in detections]
+
+
+def to_chw(images: np.ndarray) -> torch.Tensor:
+    """(B, H, W, C) images as the nets' float32 (B, C, H, W) tensor."""
+    return torch.from_numpy(np.ascontiguousarray(images, dtype=np.float32)).permute(0, 3, 1, 2)
 
 
 @dataclass

@@ -63,14 +63,16 @@ def execute_plan(
     success,
     perturbation: Perturbation | None = None,
     rng: np.random.Generator | None = None,
+    base: list[int] | None = None,
 ) -> Execution:
     """Reset to `specs`, execute `plan` open-loop as the paper does, judge `success` (a
     predicate) on the final true state. With `perturbation` the start is first moved by a
-    draw from `rng` (`sim/perturb.py`): the plan meets a world a little unlike the one planned on."""
+    draw from `rng` (`sim/perturb.py`; `base`: the start's piles, when already read): the plan
+    meets a world a little unlike the one planned on."""
     if perturbation is None:
         scene.reset(specs)
     else:
-        reset_perturbed(scene, specs, perturbation, rng if rng is not None else np.random.default_rng())
+        reset_perturbed(scene, specs, perturbation, rng if rng is not None else np.random.default_rng(), base)
     images, executed, messages = [scene.observe()], [], []
     for aff in plan:
         r = scene.execute(aff)

@@ -19,7 +19,7 @@ from afford.planning.tree import SearchConfig, SearchResult, search
 from afford.planning.uncertain import EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
-from afford.sim.perturb import Perturbation
+from afford.sim.perturb import Perturbation, piles
 from afford.sim.scene import Scene
 
 DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
@@ -99,7 +99,7 @@ def _oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
 
 
 def _nets(learned):
-    """The (Recognizer, PredictionNet) pair given, or the weights shipped in the package."""
+    """The `LearnedNets` given, or the weights shipped in the package."""
     if learned is None:
         from afford.planning.learned import load_learned
 
@@ -132,16 +132,26 @@ def _ensemble(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcom
 def execute_perturbed(
     outcome: Outcome, task: Task, scene: Scene, perturbation: Perturbation, executions: int, seed: int = 0
 ) -> list[bool]:
-    """The outcome's plan executed `executions` times, each from its own perturbed start
-    (`sim/perturb.py`, draws seeded by `seed` and the execution's number); recorded on the
-    outcome, and returned. Planners plan on the task's start; the world then differs."""
-    results = []
-    for k in range(executions):
-        rng = np.random.default_rng([seed, k])
-        ex = execute_plan(scene, task.scene, outcome.plan or (), task.success, perturbation, rng)
-        results.append(bool(ex.success))
-    outcome.perturbed = results
-    return results
+    """`perturbed_successes` of the outcome's plan, recorded on the outcome, and returned.
+    Planners plan on the task's start; the world then differs."""
+    outcome.perturbed = perturbed_successes(outcome.plan or (), task, scene, perturbation, executions, seed)
+    return outcome.perturbed
+
+
+def perturbed_successes(
+    plan, task: Task, scene: Scene, perturbation: Perturbation, executions: int, seed: int = 0
+) -> list[bool]:
+    """`plan` executed `executions` times, each from its own perturbed start (`sim/perturb.py`,
+    draws seeded by `seed` and the execution's number): does the task's check hold after each?"""
+    base = piles(scene, task.scene)  # read once: every draw perturbs the same start
+    return [
+        bool(
+            execute_plan(
+                scene, task.scene, plan, task.success, perturbation, np.random.default_rng([seed, k]), base
+            ).success
+        )
+        for k in range(executions)
+    ]
 
 
 def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:

@@ -19,6 +19,7 @@ import torch
 
 from afford.data.format import encode_affordance
 from afford.planning.goal import Goal
+from afford.planning.learned import recognise_nodes, to_chw
 from afford.planning.tree import Node, Recognised
 from afford.prediction.ensemble import spread
 from afford.prediction.model import PredictionNet
@@ -70,7 +71,7 @@ class EnsembleModel:
 
     @torch.no_grad()
     def root(self):
-        x = self._tensor(self.image[None])
+        x = to_chw(self.image[None])
         states = [m.encode(x) for m in self.members]
         latent = torch.stack([s[0][0] for s in states])
         memory = torch.stack([s[1][0] for s in states])
@@ -78,8 +79,7 @@ class EnsembleModel:
         return self.image, EnsembleState(latent, memory, images)
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
-        detections = self.recognizer(np.stack([n.image for n in nodes]))
-        return [[(d.affordance, d.score) for d in dets] for dets in detections]
+        return recognise_nodes(self.recognizer, nodes)
 
     @torch.no_grad()
     def predict(self, parents: list[Node], actions: list[Affordance]):
@@ -88,7 +88,7 @@ class EnsembleModel:
         for k, member in enumerate(self.members):
             latent = torch.stack([p.state.latent[k] for p in parents])
             memory = torch.stack([p.state.memory[k] for p in parents])
-            image = self._tensor(np.stack([p.state.images[k] for p in parents]))
+            image = to_chw(np.stack([p.state.images[k] for p in parents]))
             latent, memory, image = member.step(latent, memory, image, rows)
             out_latent.append(latent)
             out_memory.append(memory)
@@ -116,7 +116,3 @@ class EnsembleModel:
         for n, s in zip(nodes, spreads, strict=True):
             n.spread = float(s)
         return scores
-
-    @staticmethod
-    def _tensor(images: np.ndarray) -> torch.Tensor:
-        return torch.from_numpy(np.ascontiguousarray(images, dtype=np.float32)).permute(0, 3, 1, 2)

@@ -99,7 +99,7 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
         images, actions, lengths = collate_prediction([runs[int(k)] for k in picks[b : b + batch]])
         outs = torch.stack([m.rollout(images[:, 0], actions, lengths) for m in members])  # (K, B, L, C, H, W)
         mean = outs.mean(0)
-        per_pixel = outs.std(0, unbiased=False).mean(2)  # (B, L, H, W)
+        per_pixel = torch.from_numpy(spread(outs.permute(0, 1, 2, 4, 5, 3).numpy())).float()  # (B, L, H, W)
         err = (mean - images[:, 1:]).abs().mean(2)
         for j in range(len(lengths)):
             for s in range(int(lengths[j])):

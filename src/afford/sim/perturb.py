@@ -90,10 +90,16 @@ def piles(scene: Scene, specs: list[ObjectSpec]) -> list[int]:
 
 
 def reset_perturbed(
-    scene: Scene, specs: list[ObjectSpec], perturbation: Perturbation, rng: np.random.Generator
+    scene: Scene,
+    specs: list[ObjectSpec],
+    perturbation: Perturbation,
+    rng: np.random.Generator,
+    base: list[int] | None = None,
 ) -> list[ObjectSpec]:
-    """Reset `scene` to a perturbed copy of `specs` (settled); returns the copy used."""
-    base = piles(scene, specs)
+    """Reset `scene` to a perturbed copy of `specs` (settled); returns the copy used. `base`:
+    `piles(scene, specs)` when the caller has it (reading it resets the scene once more)."""
+    if base is None:
+        base = piles(scene, specs)
     for _ in range(TRIES):
         drawn = perturbation.draw(specs, base, rng)
         try:

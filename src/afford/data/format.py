@@ -321,10 +321,12 @@ class Dataset:
 
 
 def shard_summary(path: Path) -> dict[str, np.ndarray]:
-    """The small arrays of a shard (no images): what `afford data info` counts."""
+    """The small arrays of a shard (no images): what `afford data info` counts, and the true
+    poses and held objects that effects are read from (data/effects.py)."""
+    keys = ("index", "state_count", "aff_count", "affordances", "actions", "held", "poses")
     try:
         with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in ("index", "state_count", "aff_count", "affordances", "actions")}
+            return {k: z[k] for k in keys}
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
         raise DataError(f"{path}: corrupt shard ({type(e).__name__}: {e})") from None
 

@@ -68,7 +68,7 @@ class GenerateReport:
         return self.executions / self.seconds if self.seconds > 0 else 0.0
 
 
-def _pose_array(scene: Scene) -> np.ndarray:
+def pose_array(scene: Scene) -> np.ndarray:
     rows = []
     for o in scene.objects(present_only=False):
         rows.append(np.concatenate([o.pos, o.quat]) if o.present else np.full(7, np.nan))
@@ -94,7 +94,7 @@ def make_sequence(
         depths.append(depth)
         lists.append(np.array([encode_affordance(a) for a in affs], dtype=np.float32).reshape(-1, AFF_WIDTH))
         held.append(slots.index(scene.held) if scene.held else -1)
-        poses.append(_pose_array(scene))
+        poses.append(pose_array(scene))
         if step == max_steps:
             break
         # Draw from the list with turn parameters filled in (paper II.D); an affordance the

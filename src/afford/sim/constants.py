@@ -178,6 +178,18 @@ class Tolerances:
     merge_radius: float = 0.01  # metres: symmetric affordances of one type this close are one
 
 
+@dataclass(frozen=True)
+class EffectThresholds:
+    """When an execution had a side effect (data/effects.py): read from true poses."""
+
+    moved: float = 0.02  # metres across the table: another object pushed, a placed one slid
+    topple_deg: float = 30.0  # a cup's or support's axis turned this far: toppled
+    block_tip_deg: float = 10.0  # the block tilted this far: it tipped
+    drop: float = 0.03  # metres: a placed object's centre this far below the place point fell
+    rider_rise: float = 0.02  # an object this far above another's centre, and over its top
+    rider_margin: float = 0.01  # ... face (within this margin of its edges), rode on it
+
+
 UR3_DH = UR3()
 GRIPPER = Gripper()
 CUP = Cup()
@@ -191,6 +203,7 @@ PHYSICS = Physics()
 MOTION = Motion()
 LIMITS = Limits()
 TOLERANCES = Tolerances()
+EFFECTS = EffectThresholds()
 
 KINDS = ("cup", "ball", "support", "block")
 GRASPABLE = ("cup", "ball", "block")

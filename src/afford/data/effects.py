@@ -189,12 +189,19 @@ def _placed(after: np.ndarray, k: int, action: np.ndarray, kind: str) -> list[Ef
     return effects
 
 
+def label_steps(
+    poses: np.ndarray, held: np.ndarray, actions: np.ndarray, slots: tuple[str, ...]
+) -> list[StepEffects]:
+    """Every execution of one sequence: its poses and held slots per state, its actions."""
+    return [
+        step_effects(poses[t], poses[t + 1], int(held[t]), int(held[t + 1]), actions[t], slots)
+        for t in range(len(actions))
+    ]
+
+
 def sequence_effects(seq) -> list[StepEffects]:
     """Every execution of a format.Sequence, labelled."""
-    return [
-        step_effects(seq.poses[t], seq.poses[t + 1], int(seq.held[t]), int(seq.held[t + 1]), seq.actions[t], seq.slots)
-        for t in range(seq.length)
-    ]
+    return label_steps(seq.poses, seq.held, seq.actions, seq.slots)
 
 
 def summary_effects(summary: dict[str, np.ndarray], slots: tuple[str, ...]) -> list[list[StepEffects]]:
@@ -203,10 +210,7 @@ def summary_effects(summary: dict[str, np.ndarray], slots: tuple[str, ...]) -> l
     out = []
     s0 = 0
     for k, n in enumerate(summary["state_count"]):
-        poses, held = summary["poses"][s0 : s0 + n], summary["held"][s0 : s0 + n]
         actions = summary["actions"][s0 - k : s0 - k + n - 1]  # a sequence of n states has n - 1
-        out.append(
-            [step_effects(poses[t], poses[t + 1], int(held[t]), int(held[t + 1]), actions[t], slots) for t in range(n - 1)]
-        )
+        out.append(label_steps(summary["poses"][s0 : s0 + n], summary["held"][s0 : s0 + n], actions, slots))
         s0 += n
     return out

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
+import torch
 
 from afford.cli.main import main
 
@@ -124,18 +126,77 @@ def test_keep_freed_memory_applies_on_glibc():
         assert applied
 
 
-def test_turn_sampler_draws_the_asked_share_from_sequences_with_a_turn(small_dataset):
-    from afford.data.format import Col, Dataset
-    from afford.prediction.train import turn_sampler
-    from afford.sim.affordances import TYPES
+def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(small_dataset):
+    from afford.data.effects import sequence_effects
+    from afford.data.format import Dataset
+    from afford.prediction.config import PRESETS
+    from afford.prediction.train import run_sampler
 
     data = Dataset(small_dataset)
     indices = [i for i in data.indices() if data.sequence(i).length > 0]  # every split: both kinds
-    with_turn = np.array(
-        [bool(np.any(data.sequence(i).actions[:, Col.TYPE] == TYPES.index("turn"))) for i in indices]
+    labels = {i: sequence_effects(data.sequence(i)) for i in indices}
+    truth = {
+        "turn": np.array([any(s.type == "turn" for s in labels[i]) for i in indices]),
+        "effect": np.array([any(not s.canonical for s in labels[i]) for i in indices]),
+    }
+    for what, flagged in truth.items():
+        assert flagged.any() and not flagged.all(), what  # the small dataset holds both
+        config = replace(PRESETS["tiny"], **{f"{what}_fraction": 0.7})
+        weights = run_sampler(data, indices, config, seed=0).weights.numpy()
+        assert weights[flagged].sum() == pytest.approx(0.7) and weights.sum() == pytest.approx(1.0)
+        with pytest.raises(ValueError, match="between 0 and 1"):
+            run_sampler(data, indices, replace(config, **{f"{what}_fraction": 1.5}), seed=0)
+    assert run_sampler(data, indices, PRESETS["tiny"], seed=0) is None
+    with pytest.raises(ValueError, match="cannot both"):
+        run_sampler(data, indices, replace(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
+
+
+def test_effect_masks_move_with_the_augmented_images(small_dataset):
+    from afford.data.augment import AugmentConfig
+    from afford.data.effects import sequence_effects, step_mask
+    from afford.data.format import Dataset
+    from afford.data.torch_data import PredictionData, collate_prediction
+
+    data = Dataset(small_dataset)
+    i, t, step = next(
+        (i, t, s) for i in data.indices() for t, s in enumerate(sequence_effects(data.sequence(i))) if not s.canonical
     )
-    assert with_turn.any() and not with_turn.all()
-    weights = turn_sampler(data, indices, 0.7, seed=0).weights.numpy()
-    assert weights[with_turn].sum() == pytest.approx(0.7) and weights.sum() == pytest.approx(1.0)
-    with pytest.raises(ValueError, match="between 0 and 1"):
-        turn_sampler(data, indices, 1.5, seed=0)
+    seq = data.sequence(i)
+    expected = step_mask(step, seq.poses[t], seq.poses[t + 1], seq.actions[t])
+    plain = PredictionData(data, "train", random_start=False, effect_masks=True)
+    plain.indices = [i]
+    images, actions, effects = plain[0]
+    assert effects.shape == (seq.length, *images.shape[2:]) and effects.dtype == torch.bool
+    assert np.array_equal(effects[t].numpy(), expected) and expected.any()
+    mirrored = PredictionData(
+        data, "train", augment_config=AugmentConfig(shift_px=0, mirror=True), random_start=False, effect_masks=True
+    )
+    mirrored.indices = [i]
+    while True:  # the mirror is drawn half the time
+        m_images, _, m_effects = mirrored[0]
+        if not torch.equal(m_images, images):
+            break
+    assert np.array_equal(m_effects[t].numpy(), expected[:, ::-1])
+    batch = collate_prediction([plain[0], plain[0]])
+    assert len(batch) == 4 and batch[3].shape == (2, seq.length, *images.shape[2:])
+
+
+def test_the_effect_loss_counts_only_the_effect_pixels():
+    from afford.prediction.config import PRESETS
+    from afford.prediction.model import PredictionNet
+    from afford.prediction.train import sequence_loss
+
+    torch.manual_seed(0)
+    net = PredictionNet(replace(PRESETS["tiny"], loss_effect=1.0))
+    images, actions = torch.rand(2, 2, 4, 128, 128), torch.zeros(2, 1, 7)
+    steps = torch.tensor([1, 1])
+    none = torch.zeros(2, 1, 128, 128, dtype=torch.bool)
+    some = none.clone()
+    some[:, :, 40:60, 40:60] = True
+    with torch.no_grad():
+        base = float(sequence_loss(net, images, actions, steps))
+        assert float(sequence_loss(net, images, actions, steps, none)) == pytest.approx(base)
+        predicted = net.rollout(images[:, 0], actions, steps)
+        on_patch = float(((predicted - images[:, 1:]) ** 2).sum(2)[:, :, 40:60, 40:60].mean())
+        with_effects = float(sequence_loss(net, images, actions, steps, some))
+    assert on_patch > 0 and with_effects == pytest.approx(base + on_patch, rel=1e-4)

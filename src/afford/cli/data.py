@@ -58,6 +58,7 @@ def cmd_generate(args) -> int:
 def dataset_info(root: Path) -> dict:
     from tqdm import tqdm
 
+    from afford.data.effects import KINDS, summary_effects
     from afford.data.format import DataError, read_manifest, shard_path, shard_status, shard_summary
 
     m = read_manifest(root)
@@ -66,6 +67,8 @@ def dataset_info(root: Path) -> dict:
     executed: Counter[str] = Counter()
     listed: Counter[str] = Counter()
     per_state: list[int] = []
+    side: Counter[str] = Counter()  # executions with a side effect, per type
+    kinds: Counter[str] = Counter()  # executions showing each kind of side effect
     bad: list[str] = []
     for k in tqdm(present, desc="info", unit="shard", leave=False, disable=len(present) < 20):
         try:
@@ -77,6 +80,10 @@ def dataset_info(root: Path) -> dict:
         executed.update(TYPES[int(t)] for t in s["actions"][:, Col.TYPE])
         listed.update(TYPES[int(t)] for t in s["affordances"][:, Col.TYPE])
         per_state.extend(s["aff_count"].tolist())
+        for steps in summary_effects(s, tuple(m.slots)):
+            side.update(step.type for step in steps if not step.canonical)
+            for step in steps:
+                kinds.update(step.kinds)
     disk = sum(f.stat().st_size for f in root.rglob("*") if f.is_file())
     counts = np.array(per_state) if per_state else np.zeros(1)
     return {
@@ -95,6 +102,11 @@ def dataset_info(root: Path) -> dict:
             "min": int(counts.min()),
             "max": int(counts.max()),
             "per_type": {t: round(listed.get(t, 0) / max(len(per_state), 1), 2) for t in TYPES},
+        },
+        "side_effects": {
+            "executions": int(sum(side.values())),
+            "per_type": {t: side.get(t, 0) for t in TYPES},
+            "per_kind": {k: kinds.get(k, 0) for k in KINDS},
         },
         "disk_bytes": disk,
     }
@@ -121,6 +133,13 @@ def cmd_data_info(args) -> int:
     a = info["affordances_per_state"]
     per_type = ", ".join(f"{t} {v}" for t, v in a["per_type"].items())
     print(f"  affordances per state: mean {a['mean']} (min {a['min']}, max {a['max']}; {per_type})")
+    fx = info["side_effects"]
+    share = fx["executions"] / max(info["executions"], 1)
+    per = ", ".join(
+        f"{t} {n} ({n / max(info['executions_per_type'][t], 1):.0%})" for t, n in fx["per_type"].items()
+    )
+    print(f"  side effects {fx['executions']} executions ({share:.1%}; {per})")
+    print("     by kind  " + ", ".join(f"{k} {n}" for k, n in fx["per_kind"].items()))
     print(f"  disk        {info['disk_bytes'] / 2**20:.1f} MiB")
     return 0
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from afford.data.format import Col
 from afford.sim.affordances import TYPES
+from afford.sim.camera import SIZE, world_to_pixel
 from afford.sim.constants import BALL, BLOCK, CUP, EFFECTS, SUPPORT
 
 PUSHED, TOPPLED, OFF_TABLE, CARRIED = "pushed", "toppled", "off the table", "carried"
@@ -33,6 +34,7 @@ BLOCK_TIPS, PLACED_SLIDES, PLACED_FALLS = "block tips", "placed slides", "placed
 # Every side-effect kind, in the order tables list them.
 KINDS = (PUSHED, TOPPLED, OFF_TABLE, CARRIED, BLOCK_TIPS, PLACED_SLIDES, PLACED_FALLS)
 CANONICAL = "canonical"
+RADIUS_PX = 7  # where an object's effect shows: a disk this wide around it in the image
 # Half the top face of each kind that something can rest on (metres along its x and y axes).
 FOOTPRINT_HALF = {
     "block": BLOCK.half[:2],
@@ -214,3 +216,38 @@ def summary_effects(summary: dict[str, np.ndarray], slots: tuple[str, ...]) -> l
         out.append(label_steps(summary["poses"][s0 : s0 + n], summary["held"][s0 : s0 + n], actions, slots))
         s0 += n
     return out
+
+
+# ---------------------------------------------------------------------------- in the image
+def disks(points: list[np.ndarray], radius: float = RADIUS_PX, size: int = SIZE) -> np.ndarray:
+    """(size, size) bool: pixels within `radius` of any world point's projection."""
+    mask = np.zeros((size, size), bool)
+    if not points:
+        return mask
+    px = world_to_pixel(np.asarray(points, dtype=float))
+    rows, cols = np.mgrid[0:size, 0:size]
+    for col, row in px:
+        mask |= (cols + 0.5 - col) ** 2 + (rows + 0.5 - row) ** 2 <= radius**2
+    return mask
+
+
+def object_mask(before: np.ndarray, after: np.ndarray, slots: list[int]) -> np.ndarray:
+    """Disks around each slot at its position before and after (where it is on the table)."""
+    points = [p[k, :3] for k in slots for p in (before, after) if not np.isnan(p[k, 0])]
+    return disks(points)
+
+
+def effect_mask(effects: list[Effect], before: np.ndarray, after: np.ndarray, place_point) -> np.ndarray:
+    """Where side effects show: each affected object before and after, except that a placed
+    object that slid or fell is looked for where it was put and where it ended (before, it was
+    in the gripper, and its leaving the gripper is the canonical part)."""
+    points = []
+    for e in effects:
+        start = place_point if e.kind in (PLACED_SLIDES, PLACED_FALLS) else before[e.slot, :3]
+        points += [p for p in (start, after[e.slot, :3]) if not np.isnan(p[0])]
+    return disks(points)
+
+
+def step_mask(step: StepEffects, before: np.ndarray, after: np.ndarray, action: np.ndarray) -> np.ndarray:
+    """Where one execution's side effects show (all False for a canonical step)."""
+    return effect_mask(list(step.effects), before, after, np.asarray(action[Col.POSITION], dtype=float))

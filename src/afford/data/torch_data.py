@@ -13,6 +13,7 @@ import torch
 from torch.utils.data import Dataset as TorchDataset
 
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
+from afford.data.effects import sequence_effects, step_mask
 from afford.data.format import Dataset
 
 
@@ -47,8 +48,10 @@ def collate_recognition(batch) -> tuple[torch.Tensor, list[torch.Tensor]]:
 class PredictionData(TorchDataset):
     """A run of L = 1..max_steps executions from a random start state of a sequence.
 
-    Returns images (L+1, 4, H, W) and actions (L, 7). With `random_start` off, every run starts
-    at state 0 and takes as many steps as the sequence has (for evaluation per step).
+    Returns images (L+1, 4, H, W) and actions (L, 7); with `effect_masks`, also (L, H, W) masks
+    of where each step had a side effect (data/effects.py), moved with the images by the
+    augmentation. With `random_start` off, every run starts at state 0 and takes as many steps
+    as the sequence has (for evaluation per step).
     """
 
     def __init__(
@@ -59,6 +62,7 @@ class PredictionData(TorchDataset):
         augment_config: AugmentConfig = NO_AUGMENT,
         random_start: bool = True,
         seed: int = 0,
+        effect_masks: bool = False,
     ):
         self.data = data
         self.indices = [i for i in data.indices(split) if data.sequence(i).length > 0]
@@ -66,29 +70,55 @@ class PredictionData(TorchDataset):
         self.config = augment_config
         self.random_start = random_start
         self.rng = np.random.default_rng(seed)
+        self.effect_masks = effect_masks
 
     def __len__(self) -> int:
         return len(self.indices)
 
-    def __getitem__(self, k: int) -> tuple[torch.Tensor, torch.Tensor]:
+    def __getitem__(self, k: int) -> tuple[torch.Tensor, ...]:
         seq = self.data.sequence(self.indices[k])
         start = int(self.rng.integers(seq.length)) if self.random_start else 0
         stop = min(seq.length, start + self.max_steps)
         images = np.stack([seq.image(t) for t in range(start, stop + 1)])
+        if self.effect_masks:  # a fifth channel, so that shifts and mirrors move it with the image
+            images = np.concatenate([images, _effect_masks(seq, start, stop)[..., None]], -1)
         images, (actions,) = augment(images, [seq.actions[start:stop]], self.config, self.rng, noisy=[True])
+        if self.effect_masks:
+            return (
+                _to_chw(images[..., :-1]),
+                torch.from_numpy(actions),
+                torch.from_numpy(images[1:, ..., -1] > 0.5),
+            )
         return _to_chw(images), torch.from_numpy(actions)
 
 
-def collate_prediction(batch) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Pad runs to the longest: images (B, L+1, 4, H, W), actions (B, L, 7), steps (B,)."""
+def _effect_masks(seq, start: int, stop: int) -> np.ndarray:
+    """(stop - start + 1, H, W) float32: state t's mask shows where step t - 1 had a side effect
+    (the start state's is empty)."""
+    labels = sequence_effects(seq)
+    masks = np.zeros((stop - start + 1, *seq.rgb.shape[1:3]), np.float32)
+    for t in range(start, stop):
+        if not labels[t].canonical:
+            masks[t - start + 1] = step_mask(labels[t], seq.poses[t], seq.poses[t + 1], seq.actions[t])
+    return masks
+
+
+def collate_prediction(batch) -> tuple[torch.Tensor, ...]:
+    """Pad runs to the longest: images (B, L+1, 4, H, W), actions (B, L, 7), steps (B,), and
+    with effect masks, effects (B, L, H, W)."""
     steps = torch.tensor([len(b[1]) for b in batch])
     longest = int(steps.max())
     images = torch.zeros((len(batch), longest + 1, *batch[0][0].shape[1:]))
     actions = torch.zeros((len(batch), longest, 7))
-    for j, (im, act) in enumerate(batch):
+    for j, (im, act, *_) in enumerate(batch):
         images[j, : len(im)] = im
         actions[j, : len(act)] = act
-    return images, actions, steps
+    if len(batch[0]) == 2:
+        return images, actions, steps
+    effects = torch.zeros((len(batch), longest, *batch[0][0].shape[2:]), dtype=torch.bool)
+    for j, (_, _, fx_masks) in enumerate(batch):
+        effects[j, : len(fx_masks)] = fx_masks
+    return images, actions, steps, effects
 
 
 def worker_init(worker_id: int) -> None:

@@ -15,12 +15,13 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from afford.data import effects as fx
 from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
+from afford.prediction import foresight
 from afford.prediction.config import PredictionConfig
 from afford.prediction.model import PredictionNet
 from afford.sim.affordances import TYPES
-from afford.sim.constants import TOLERANCES
 from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "prediction"
@@ -30,6 +31,8 @@ BATCH = 32
 STEPS = 4
 # metric -> the changed-pixel threshold it averages over (None: all pixels)
 METRICS = {"all_area": None, "changed_area": CHANGED, "changed_area_any": 0.0}
+# The changed-area error of canonical steps and of steps with a side effect (errors()).
+SPLIT_METRICS = ("changed_area_canonical", "changed_area_side")
 
 
 def load_net(path: str | Path) -> tuple[PredictionNet, PredictionConfig]:
@@ -48,6 +51,10 @@ def errors(net: PredictionNet | None, data: Dataset, split: str, limit: int | No
         else np.linspace(0, len(runs) - 1, min(limit, len(runs))).astype(int)
     )
     out = {m: np.full((len(picks), STEPS), np.nan) for m in METRICS}
+    side = np.zeros((len(picks), STEPS), bool)  # the step had a side effect (data/effects.py)
+    for n, k in enumerate(picks):
+        for t, step in enumerate(fx.sequence_effects(data.sequence(runs.indices[int(k)]))[:STEPS]):
+            side[n, t] = not step.canonical
     for b in range(0, len(picks), BATCH):
         images, actions, steps = collate_prediction([runs[int(k)] for k in picks[b : b + BATCH]])
         truth, before = images[:, 1:], images[:, :-1]
@@ -65,6 +72,10 @@ def errors(net: PredictionNet | None, data: Dataset, split: str, limit: int | No
                         err = err[moved[j, s] > threshold]
                     if err.numel():
                         out[metric][b + j, s] = float(err.mean())
+    # Table 2's changed-area error split by what the step did: canonical steps, side-effect steps.
+    changed = out["changed_area"]
+    out["changed_area_canonical"] = np.where(side, np.nan, changed)
+    out["changed_area_side"] = np.where(side, changed, np.nan)
     return out, [runs.indices[int(k)] for k in picks]
 
 
@@ -101,6 +112,7 @@ def evaluate(
     for split, limit in (("test", None), ("train", TRAIN_SEQUENCES)):
         result[split] = table(errors(net, data, split, limit)[0])
         result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
+    result["foresight"] = foresight.measure(net.rollout, data, "test").as_dict()
     if recognizer is not None:
         from afford.prediction.futures import future_recall, net_predictor
 
@@ -111,35 +123,9 @@ def evaluate(
 
 
 # ---------------------------------------------------------------------------- pictures
-# The canonical effects (the first step executing that type with no side effect), then the
-# non-canonical ones, found from the true poses.
-CANONICAL = TYPES  # one picture of each type's plain effect
-EVENTS = (*CANONICAL, "falls off the table", "cup topples", "cup turns with the block", "ball rolls away")
-
-
-def _effects(seq, t: int) -> set[str]:
-    """The non-canonical effects that step t of `seq` shows on its true poses."""
-    before, after = seq.poses[t], seq.poses[t + 1]
-    act = seq.action(t)
-    seen: set[str] = set()
-    for k, slot in enumerate(seq.slots):
-        was, now = not np.isnan(before[k, 0]), not np.isnan(after[k, 0])
-        if was and not now:
-            seen.add("falls off the table")
-        if slot.startswith("cup") and was and now and seq.held[t + 1] != k:
-            if _upright(before[k]) and not _upright(after[k]):
-                seen.add("cup topples")
-            moved = np.linalg.norm(after[k, :2] - before[k, :2]) > TOLERANCES.position
-            # Carried round on the block: raised before and after, still upright (a cup
-            # flung off by the turn lands on the table or on its side).
-            carried = before[k, 2] > 0.06 and after[k, 2] > 0.06 and _upright(after[k])
-            if act.type == "turn" and moved and carried:
-                seen.add("cup turns with the block")
-        untouched = seq.held[t] != k and seq.held[t + 1] != k
-        if slot.startswith("ball") and was and now and untouched:
-            if np.linalg.norm(after[k, :2] - before[k, :2]) > 0.05:
-                seen.add("ball rolls away")
-    return seen
+# The canonical effects (the first step executing that type with no side effect), then one of
+# each kind of side effect (data/effects.py).
+EVENTS = (*TYPES, *fx.KINDS)
 
 
 def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]]:
@@ -147,21 +133,12 @@ def find_events(data: Dataset, split: str = "test") -> dict[str, tuple[int, int]
     found: dict[str, tuple[int, int]] = {}
     for i in data.indices(split):
         seq = data.sequence(i)
-        for t in range(seq.length):
-            events = _effects(seq, t)
-            if not events:  # a canonical step: only what the action itself does
-                events = {seq.action(t).type}
-            for name in events:
+        for t, step in enumerate(fx.sequence_effects(seq)):
+            for name in step.kinds or {step.type}:
                 found.setdefault(name, (i, t))
         if len(found) == len(EVENTS):
             break
     return found
-
-
-def _upright(pose: np.ndarray) -> bool:
-    w, x, y, z = pose[3:7]
-    up_z = 1 - 2 * (x * x + y * y)  # z component of the body's z axis
-    return up_z > TOLERANCES.upright_cos
 
 
 @torch.no_grad()
@@ -199,12 +176,21 @@ def format_table(result: dict) -> str:
         "all_area": "all area",
         "changed_area": f"changed > {CHANGED}",
         "changed_area_any": "changed at all",
+        "changed_area_canonical": "canonical steps",
+        "changed_area_side": "side-effect steps",
     }
-    lines.append(f"{'':11s} {'step':>4s} " + " ".join(f"{names[m]:>18s}" for m in METRICS))
+    metrics = (*METRICS, *SPLIT_METRICS)
+    lines.append(f"{'':11s} {'step':>4s} " + " ".join(f"{names[m]:>18s}" for m in metrics))
     for split in ("test", "train"):
         for who in (split, f"{split}_copy"):
             for step, row in result[who].items():
-                lines.append(f"{who:11s} {step:>4s} " + " ".join(f"{cell(row[m]):>18s}" for m in METRICS))
+                lines.append(f"{who:11s} {step:>4s} " + " ".join(f"{cell(row[m]):>18s}" for m in metrics))
+    if "foresight" in result:
+        lines += [
+            "",
+            "foresight, one step from the true state (1: the truth drawn, 0: no better than a copy):",
+        ]
+        lines.append(foresight.format_foresight(result["foresight"]))
     if "future_recall" in result:
         from afford.prediction.futures import format_futures
 

@@ -11,11 +11,13 @@ from torch import nn
 from torch.utils.data import DataLoader, WeightedRandomSampler
 
 from afford.data.augment import AugmentConfig
-from afford.data.format import Col, Dataset
+from afford.data.effects import summary_effects
+from afford.data.format import Dataset, shard_path, shard_summary
 from afford.data.torch_data import PredictionData, collate_prediction, worker_init
 from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
+from afford.sim.affordances import TYPES
 from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
@@ -38,7 +40,13 @@ def change_mask(images: torch.Tensor, predicted: torch.Tensor, repair: bool) -> 
     return ((images[:, 1:] - inputs).abs().amax(2, keepdim=True) > CHANGED).float()
 
 
-def sequence_loss(net: nn.Module, images: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor):
+def sequence_loss(
+    net: nn.Module,
+    images: torch.Tensor,
+    actions: torch.Tensor,
+    steps: torch.Tensor,
+    effects: torch.Tensor | None = None,
+):
     """The training loss, mean over the real steps of the batch (padded steps are not run).
 
     The paper's is the squared error over the channels, mean over pixels (paper II.C). The
@@ -52,6 +60,13 @@ def sequence_loss(net: nn.Module, images: torch.Tensor, actions: torch.Tensor, s
     the step's own input (the previous prediction): then the mask is also taught to open, and
     D to redraw, where an earlier step left an error (a ghost, a blurred object), instead of
     being taught to keep such errors shut in, so they stop compounding through eq. (3).
+
+    `effects` (B, L, H, W), with `config.loss_effect`: 1 on the pixels where each step had a
+    side effect (data/effects.py). There the squared error is added again, as a mean over those
+    pixels alone: a ball that rolls off covers a few hundred of 16,384 pixels, so in the mean
+    over the image it weighs nothing, and the squared error (the mean outcome) rather than the
+    absolute error (the median) keeps an effect that follows in fewer than half of similar
+    cases from being drawn as not happening.
 
     `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
@@ -71,35 +86,55 @@ def sequence_loss(net: nn.Module, images: torch.Tensor, actions: torch.Tensor, s
         if c.loss_values:
             values = (differences[:, :, :-1] - truth).abs().sum(2, keepdim=True) * changed
             err = err + c.loss_values * values.sum((-3, -2, -1)) / changed.sum((-3, -2, -1)).clamp_min(1.0)
+    if c.loss_effect and effects is not None:
+        on = effects.float()
+        squared = (diff**2).sum(2) * on
+        err = err + c.loss_effect * squared.sum((-2, -1)) / on.sum((-2, -1)).clamp_min(1.0)
     mask = step_mask(steps, actions.shape[1])
     return (err * mask).sum() / mask.sum()
 
 
-def turn_sampler(data: Dataset, indices: list[int], fraction: float, seed: int) -> WeightedRandomSampler:
-    """Draws training runs so that `fraction` of them come from sequences holding a turn (read
-    from the shards' small arrays, no images)."""
-    from afford.data.format import shard_path, shard_summary
-    from afford.sim.affordances import TYPES
-
-    if not 0 < fraction < 1:
-        raise ValueError(f"turn_fraction must lie between 0 and 1, not {fraction}")
+def sequence_flags(data: Dataset) -> dict[str, dict[int, bool]]:
+    """Per sequence index, whether it holds a turn and whether it holds a side effect
+    (data/effects.py), read from the shards' small arrays (no images)."""
     turn = TYPES.index("turn")
-    has_turn = {}
+    flags: dict[str, dict[int, bool]] = {"turn": {}, "effect": {}}
     for k in range(data.manifest.n_shards):
         z = shard_summary(shard_path(data.root, k))
-        ends = np.cumsum(z["state_count"] - 1)
-        for i, stop, n in zip(z["index"], ends, z["state_count"] - 1, strict=True):
-            has_turn[int(i)] = bool(np.any(z["actions"][stop - n : stop, Col.TYPE] == turn))
-    with_turn = np.array([has_turn[i] for i in indices])
-    if not with_turn.any() or with_turn.all():
-        raise ValueError("turn_fraction needs training sequences both with and without a turn")
-    weights = np.where(with_turn, fraction / with_turn.sum(), (1 - fraction) / (~with_turn).sum())
+        labels = summary_effects(z, data.slots)
+        for i, steps in zip(z["index"], labels, strict=True):
+            flags["turn"][int(i)] = any(s.type == TYPES[turn] for s in steps)
+            flags["effect"][int(i)] = any(not s.canonical for s in steps)
+    return flags
+
+
+def share_sampler(flagged: np.ndarray, fraction: float, seed: int, what: str) -> WeightedRandomSampler:
+    """Draws runs so that `fraction` of them come from the flagged sequences."""
+    if not 0 < fraction < 1:
+        raise ValueError(f"{what}_fraction must lie between 0 and 1, not {fraction}")
+    if not flagged.any() or flagged.all():
+        raise ValueError(f"{what}_fraction needs training sequences both with and without a {what}")
+    weights = np.where(flagged, fraction / flagged.sum(), (1 - fraction) / (~flagged).sum())
     return WeightedRandomSampler(
         torch.from_numpy(weights),
-        len(indices),
+        len(flagged),
         replacement=True,
         generator=torch.Generator().manual_seed(seed),
     )
+
+
+def run_sampler(data: Dataset, indices: list[int], config: PredictionConfig, seed: int):
+    """The training runs' sampler: more turns (`turn_fraction`), more side effects
+    (`effect_fraction`), or None (runs as the data comes)."""
+    asked = {"turn": config.turn_fraction, "effect": config.effect_fraction}
+    asked = {what: share for what, share in asked.items() if share}
+    if not asked:
+        return None
+    if len(asked) > 1:
+        raise ValueError("turn_fraction and effect_fraction cannot both be set")
+    ((what, share),) = asked.items()
+    flags = sequence_flags(data)[what]
+    return share_sampler(np.array([flags[i] for i in indices]), share, seed, what)
 
 
 def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
@@ -134,13 +169,13 @@ def train(
         position_noise=config.position_noise,
         angle_noise=config.angle_noise,
     )
-    train_set = PredictionData(data, "train", config.max_steps, augment, seed=stream)
+    train_set = PredictionData(
+        data, "train", config.max_steps, augment, seed=stream, effect_masks=bool(config.loss_effect)
+    )
     if config.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
         draw = np.random.default_rng(config.seed).integers(len(train_set), size=len(train_set))
         train_set.indices = [train_set.indices[k] for k in draw]
-    sampler = (
-        turn_sampler(data, train_set.indices, config.turn_fraction, stream) if config.turn_fraction else None
-    )
+    sampler = run_sampler(data, train_set.indices, config, stream)
     val_set = PredictionData(data, "val", config.max_steps, random_start=False)
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)

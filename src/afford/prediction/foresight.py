@@ -1,0 +1,143 @@
+"""Foresight: does the prediction net draw what an action does, to what it acts on and to the rest?
+
+Table 2 (paper IV.B) averages the error over the image, where side effects are a few pixels of
+a few steps. Foresight looks where they are. Every execution of a split is predicted one step
+from its true state. Around each object concerned, disks of `effects.RADIUS_PX` pixels at its position
+before and after the step; over those pixels
+
+    foresight = 1 - (mean absolute error of the prediction) / (mean absolute error of copying the input)
+
+so drawing the truth scores 1 and drawing nothing new scores 0 (below 0: worse than no change).
+"Acted on" is the object the action grasps, places or turns; "side" the objects that took a
+side effect (data/effects.py), per action type and per kind of effect.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from afford.data import effects as fx
+from afford.data.effects import effect_mask, object_mask
+from afford.data.format import Col, Dataset
+from afford.sim.affordances import TYPES
+
+BATCH = 32
+
+
+@dataclass
+class Tally:
+    """Sums over the pixels of one group: the prediction's and the copy's absolute errors."""
+
+    predicted: float = 0.0
+    copied: float = 0.0
+    pixels: int = 0
+    executions: int = 0
+
+    def add(self, predicted: np.ndarray, copied: np.ndarray, mask: np.ndarray) -> None:
+        if mask.any():
+            self.predicted += float(predicted[mask].sum())
+            self.copied += float(copied[mask].sum())
+            self.pixels += int(mask.sum())
+            self.executions += 1
+
+    @property
+    def foresight(self) -> float | None:
+        return None if self.copied <= 0 else 1.0 - self.predicted / self.copied
+
+    def as_dict(self) -> dict:
+        value = self.foresight
+        return {
+            "foresight": None if value is None else round(value, 4),
+            "executions": self.executions,
+            "pixels": self.pixels,
+        }
+
+
+def pixel_errors(predicted: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """(..., H, W) mean absolute error over the channels of (..., C, H, W) images."""
+    return np.abs(predicted - truth).mean(-3)
+
+
+def foresight_of(
+    predicted: np.ndarray, before: np.ndarray, truth: np.ndarray, mask: np.ndarray
+) -> float | None:
+    """Foresight of one prediction over a mask (images (C, H, W))."""
+    t = Tally()
+    t.add(pixel_errors(predicted, truth), pixel_errors(before, truth), mask)
+    return t.foresight
+
+
+@dataclass
+class Foresight:
+    """Tallies by group: acted on / side, each overall and per type; side per kind."""
+
+    acted: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
+    side: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
+    kinds: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in fx.KINDS})
+
+    def add(self, step: fx.StepEffects, action, before_poses, after_poses, predicted, before, truth) -> None:
+        err, copy = pixel_errors(predicted, truth), pixel_errors(before, truth)
+        if step.acted is not None:
+            mask = object_mask(before_poses, after_poses, [step.acted])
+            for key in ("all", step.type):
+                self.acted[key].add(err, copy, mask)
+        if step.effects:
+            place = np.asarray(action[Col.POSITION], dtype=float)
+            mask = fx.step_mask(step, before_poses, after_poses, action)
+            for key in ("all", step.type):
+                self.side[key].add(err, copy, mask)
+            for kind in step.kinds:
+                of_kind = [e for e in step.effects if e.kind == kind]
+                self.kinds[kind].add(err, copy, effect_mask(of_kind, before_poses, after_poses, place))
+
+    def as_dict(self) -> dict:
+        return {
+            "acted": {k: t.as_dict() for k, t in self.acted.items()},
+            "side": {k: t.as_dict() for k, t in self.side.items()},
+            "kinds": {k: t.as_dict() for k, t in self.kinds.items()},
+        }
+
+
+@torch.no_grad()
+def measure(predict, data: Dataset, split: str = "test", limit: int | None = None) -> Foresight:
+    """Foresight of `predict(images (B, C, H, W), actions (B, 1, 7)) -> (B, 1, C, H, W)` over
+    every execution of a split (`limit`: the first so many sequences)."""
+    result = Foresight()
+    pending: list[tuple] = []
+
+    def flush() -> None:
+        images = torch.from_numpy(np.stack([p[1] for p in pending]))
+        actions = torch.from_numpy(np.stack([p[2] for p in pending]))[:, None]
+        predicted = predict(images, actions)[:, 0].float().numpy()
+        for (step, before, action, truth, poses0, poses1), pred in zip(pending, predicted, strict=True):
+            result.add(step, action, poses0, poses1, pred, before, truth)
+        pending.clear()
+
+    indices = list(data.indices(split))[:limit]
+    for i in indices:
+        seq = data.sequence(i)
+        for t, step in enumerate(fx.sequence_effects(seq)):
+            before = seq.image(t).transpose(2, 0, 1)
+            truth = seq.image(t + 1).transpose(2, 0, 1)
+            pending.append((step, before, seq.actions[t], truth, seq.poses[t], seq.poses[t + 1]))
+            if len(pending) == BATCH:
+                flush()
+    if pending:
+        flush()
+    return result
+
+
+def format_foresight(result: dict) -> str:
+    def cell(t: dict) -> str:
+        return "-" if t["foresight"] is None else f"{t['foresight']:.2f} ({t['executions']})"
+
+    groups = ("all", *TYPES)
+    lines = [f"{'foresight (executions)':24s} " + " ".join(f"{g:>12s}" for g in groups)]
+    for who in ("acted", "side"):
+        name = "acted-on object" if who == "acted" else "side effects"
+        lines.append(f"{name:24s} " + " ".join(f"{cell(result[who][g]):>12s}" for g in groups))
+    lines.append("by kind: " + ", ".join(f"{k} {cell(t)}" for k, t in result["kinds"].items()))
+    return "\n".join(lines)

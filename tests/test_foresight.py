@@ -1,0 +1,67 @@
+"""Foresight (prediction/foresight.py) on hand-made cases: the truth scores 1, a copy of the input 0."""
+
+import numpy as np
+import pytest
+
+from afford.data.effects import Effect, StepEffects, disks
+from afford.prediction.foresight import Foresight, foresight_of
+
+
+def images():
+    rng = np.random.default_rng(0)
+    before = rng.random((4, 128, 128)).astype(np.float32)
+    truth = before.copy()
+    truth[:, 50:70, 50:70] = rng.random((4, 20, 20))  # something changed here
+    return before, truth
+
+
+def test_the_truth_scores_one_and_a_copy_zero():
+    before, truth = images()
+    mask = np.zeros((128, 128), bool)
+    mask[45:75, 45:75] = True
+    assert foresight_of(truth, before, truth, mask) == pytest.approx(1.0)
+    assert foresight_of(before, before, truth, mask) == pytest.approx(0.0)
+    halfway = (before + truth) / 2
+    assert foresight_of(halfway, before, truth, mask) == pytest.approx(0.5)
+    assert foresight_of(1 - truth, before, truth, mask) < 0  # worse than no change
+
+
+def test_nothing_changed_under_the_mask_gives_no_figure():
+    before, truth = images()
+    mask = np.zeros((128, 128), bool)
+    mask[:10, :10] = True
+    assert foresight_of(truth, before, truth, mask) is None
+
+
+def test_disks_are_centred_on_the_projected_point():
+    from afford.sim.camera import world_to_pixel
+
+    point = np.array([0.05, 0.30, 0.02])
+    mask = disks([point], radius=7)
+    col, row = world_to_pixel(point)
+    assert mask[int(row), int(col)]
+    assert 140 <= mask.sum() <= 170  # pi * 7^2 = 154
+    assert not mask[int(row) + 9, int(col)]
+
+
+def test_groups_take_the_acted_on_object_and_the_side_effects_apart():
+    before, _ = images()
+    truth = before.copy()
+    poses = np.full((2, 7), np.nan)
+    poses[0] = [0.0, 0.25, 0.02, 1, 0, 0, 0]  # acted on
+    poses[1] = [0.1, 0.35, 0.02, 1, 0, 0, 0]  # took a side effect
+    after = poses.copy()
+    predicted = before.copy()
+    from afford.sim.camera import world_to_pixel
+
+    for k in range(2):
+        col, row = world_to_pixel(poses[k, :3]).astype(int)
+        truth[:, row - 3 : row + 3, col - 3 : col + 3] = 0.0
+    col, row = world_to_pixel(poses[0, :3]).astype(int)
+    predicted[:, row - 3 : row + 3, col - 3 : col + 3] = 0.0  # only the acted-on object drawn
+    step = StepEffects("turn", 0, (Effect("pushed", 1),))
+    f = Foresight()
+    f.add(step, np.array([2, 0, 0.25, 0.02, 0, 0, 90]), poses, after, predicted, before, truth)
+    assert f.acted["turn"].foresight == pytest.approx(1.0)
+    assert f.side["turn"].foresight == pytest.approx(0.0)
+    assert f.kinds["pushed"].foresight == pytest.approx(0.0) and f.acted["grasp"].executions == 0

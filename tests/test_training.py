@@ -158,9 +158,8 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     from afford.data.torch_data import PredictionData, collate_prediction
 
     data = Dataset(small_dataset)
-    i, t, step = next(
-        (i, t, s) for i in data.indices() for t, s in enumerate(sequence_effects(data.sequence(i))) if not s.canonical
-    )
+    labelled = ((i, t, s) for i in data.indices() for t, s in enumerate(sequence_effects(data.sequence(i))))
+    i, t, step = next((i, t, s) for i, t, s in labelled if not s.canonical)
     seq = data.sequence(i)
     expected = step_mask(step, seq.poses[t], seq.poses[t + 1], seq.actions[t])
     plain = PredictionData(data, "train", random_start=False, effect_masks=True)
@@ -168,9 +167,8 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     images, actions, effects = plain[0]
     assert effects.shape == (seq.length, *images.shape[2:]) and effects.dtype == torch.bool
     assert np.array_equal(effects[t].numpy(), expected) and expected.any()
-    mirrored = PredictionData(
-        data, "train", augment_config=AugmentConfig(shift_px=0, mirror=True), random_start=False, effect_masks=True
-    )
+    mirror = AugmentConfig(shift_px=0, mirror=True)
+    mirrored = PredictionData(data, "train", augment_config=mirror, random_start=False, effect_masks=True)
     mirrored.indices = [i]
     while True:  # the mirror is drawn half the time
         m_images, _, m_effects = mirrored[0]

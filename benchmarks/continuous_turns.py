@@ -39,8 +39,9 @@ def main() -> None:
     from afford.planning.angles import optimise_turns
     from afford.planning.learned import LearnedModel, load_learned
     from afford.planning.run import solve
+    from afford.planning.strategies import search
     from afford.planning.tasks import load_task
-    from afford.planning.tree import SearchConfig, search
+    from afford.planning.tree import SearchConfig
     from afford.sim.scene import Scene
 
     learned = load_learned(args.weights)

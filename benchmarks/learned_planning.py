@@ -16,8 +16,9 @@ import json
 import torch
 
 from afford.planning.learned import LearnedModel, load_learned
+from afford.planning.strategies import search
 from afford.planning.tasks import load_task
-from afford.planning.tree import SearchConfig, search
+from afford.planning.tree import SearchConfig
 from afford.sim.scene import Scene
 
 

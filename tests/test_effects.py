@@ -7,7 +7,7 @@ from test_physics import BESIDE
 
 from afford.data import effects as fx
 from afford.data.format import encode_affordance
-from afford.data.generate import pose_array
+from afford.data.shard import pose_array
 from afford.sim.constants import BALL
 from afford.sim.scene import ObjectSpec as O
 

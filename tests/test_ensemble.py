@@ -12,7 +12,8 @@ import torch
 from afford.cli.main import main
 from afford.data.format import Dataset
 from afford.planning.goal import Goal
-from afford.planning.tree import Node, SearchConfig, search
+from afford.planning.strategies import search
+from afford.planning.tree import Node, SearchConfig
 from afford.planning.uncertain import EnsembleError, EnsembleModel, risk_score
 from afford.prediction.config import PRESETS as PRED
 from afford.prediction.ensemble import calibrate, spread

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from afford.planning.goal import Goal
-from afford.planning.tree import SearchConfig, edges, search
+from afford.planning.strategies import search
+from afford.planning.tree import SearchConfig, edges
 from afford.sim.affordances import Affordance
 
 CELLS = 8

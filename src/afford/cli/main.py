@@ -323,7 +323,7 @@ def _planners(given: str) -> tuple[str, ...]:
 
 def _add_search_arguments(parser, max_nodes: bool = True) -> None:
     """How the tree grows: the paper's breadth-first search, or a guided one (paper V)."""
-    from afford.planning.guided import STRATEGIES
+    from afford.planning.strategies import STRATEGIES
     from afford.planning.tree import GUIDED_BUDGET, SearchConfig
 
     parser.add_argument(

@@ -4,7 +4,7 @@ Sequence i draws everything from its own generator seeded by (seed, i), and the 
 reset before it, so its content does not depend on the worker that makes it. Workers write
 whole shards atomically (see format.py); a re-run makes only the shards still missing.
 The shards are handed out by an executor: a local process pool here, or Ray tasks on a local
-instance or a cluster (`data/ray_executor.py`); both run the same `make_shard`.
+instance or a cluster (`data/ray_executor.py`); both run the same `shard.make_shard`.
 """
 
 from __future__ import annotations
@@ -15,28 +15,21 @@ from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from afford.data.format import (
-    AFF_WIDTH,
     SHARD_DIR,
     DataError,
     Manifest,
-    Sequence,
     check_shard,
     default_splits,
-    encode_affordance,
-    quantise,
     read_manifest,
     shard_path,
     shard_status,
     write_manifest,
-    write_shard,
 )
-from afford.sim.affordances import parametrise
-from afford.sim.layout import LayoutConfig, random_layout
+from afford.data.ray_executor import run_on_ray
+from afford.data.shard import TURN_ANGLES, ShardJob, ShardResult, make_shard
+from afford.sim.layout import LayoutConfig
 from afford.sim.mjcf import slot_names
-from afford.sim.scene import Scene
 
 
 @dataclass(frozen=True)
@@ -68,105 +61,6 @@ class GenerateReport:
         return self.executions / self.seconds if self.seconds > 0 else 0.0
 
 
-def pose_array(scene: Scene) -> np.ndarray:
-    rows = []
-    for o in scene.objects(present_only=False):
-        rows.append(np.concatenate([o.pos, o.quat]) if o.present else np.full(7, np.nan))
-    return np.array(rows, dtype=np.float32)
-
-
-TURN_ANGLES = ("quarter", "continuous")
-
-
-def make_sequence(
-    scene: Scene, seed: int, index: int, max_steps: int, turn_angles: str = "quarter"
-) -> tuple[Sequence, int]:
-    """Sequence `index` of the dataset with `seed`, and how many drawn executions failed."""
-    rng = np.random.default_rng([seed, index])
-    scene.reset(random_layout(rng, LayoutConfig()), check=False)  # free of overlaps by construction
-    slots = tuple(name for name, _ in scene.slots)
-    rgbs, depths, lists, actions, held, poses = [], [], [], [], [], []
-    failed = 0
-    for step in range(max_steps + 1):
-        rgb, depth = quantise(scene.observe())
-        affs = scene.affordances()
-        rgbs.append(rgb)
-        depths.append(depth)
-        lists.append(np.array([encode_affordance(a) for a in affs], dtype=np.float32).reshape(-1, AFF_WIDTH))
-        held.append(slots.index(scene.held) if scene.held else -1)
-        poses.append(pose_array(scene))
-        if step == max_steps:
-            break
-        # Draw from the list with turn parameters filled in (paper II.D); an affordance the
-        # arm cannot carry out is put back to the scene as it was and another is drawn.
-        candidates = parametrise(affs)
-        if turn_angles == "continuous":
-            # Each +-90 becomes an angle of its sign and a random size: still one each way.
-            candidates = [
-                a.with_turn(float(np.sign(a.turn) * rng.uniform(1.0, 180.0))) if a.turn else a
-                for a in candidates
-            ]
-        executed = None
-        while candidates and executed is None:
-            a = candidates.pop(int(rng.integers(len(candidates))))
-            snap = scene.snapshot()
-            if scene.execute(a).executed:
-                executed = a
-            else:
-                failed += 1
-                scene.restore(snap)
-        if executed is None:
-            break
-        actions.append(encode_affordance(executed))
-    seq = Sequence(
-        index=index,
-        rgb=np.stack(rgbs),
-        depth=np.stack(depths),
-        affordances=lists,
-        actions=np.array(actions, dtype=np.float32).reshape(-1, AFF_WIDTH),
-        held=np.array(held, dtype=np.int8),
-        poses=np.stack(poses),
-        slots=slots,
-    )
-    return seq, failed
-
-
-@dataclass(frozen=True)
-class ShardJob:
-    root: str  # the dataset folder, as the worker sees it (shared storage on a cluster)
-    shard: int
-    start: int  # first sequence index
-    stop: int
-    seed: int
-    max_steps: int
-    turn_angles: str = "quarter"
-
-
-@dataclass(frozen=True)
-class ShardResult:
-    shard: int
-    sequences: int
-    executions: int
-    failed: int
-
-
-_worker_scene: Scene | None = None  # one simulator per worker process, made on its first shard
-
-
-def make_shard(job: ShardJob) -> ShardResult:
-    """Make and write one shard; writing it again gives the same bytes, so a retried job is harmless."""
-    global _worker_scene
-    if _worker_scene is None:
-        _worker_scene = Scene()
-    seqs, failed = [], 0
-    for i in range(job.start, job.stop):
-        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps, job.turn_angles)
-        seqs.append(seq)
-        failed += f
-    write_shard(shard_path(Path(job.root), job.shard), seqs)
-    return ShardResult(job.shard, len(seqs), sum(s.length for s in seqs), failed)
-
-
 def run_local(jobs: list[ShardJob], config: GenerateConfig) -> Iterator[ShardResult]:
     """The jobs in this process, or in a pool of `config.workers` fresh interpreters."""
     if config.workers <= 1 or len(jobs) <= 1:
@@ -178,8 +72,6 @@ def run_local(jobs: list[ShardJob], config: GenerateConfig) -> Iterator[ShardRes
 
 
 def run_ray(jobs: list[ShardJob], config: GenerateConfig) -> Iterator[ShardResult]:
-    from afford.data.ray_executor import run_on_ray
-
     yield from run_on_ray(jobs, config.workers, config.address)
 
 

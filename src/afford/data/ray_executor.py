@@ -1,6 +1,6 @@
 """Dataset shards as Ray tasks: on a local Ray instance, or on a cluster made with `ray start`.
 
-Each shard is one task running `generate.make_shard`. When a worker dies, Ray runs its task
+Each shard is one task running `shard.make_shard`. When a worker dies, Ray runs its task
 again (RETRIES), which is safe: a shard depends only on (seed, its sequence indices), so a
 re-run writes the same bytes, and it is written atomically, so the dead worker left at most a
 temporary file. Results come back as tasks finish, which is what feeds the progress bar.
@@ -16,7 +16,7 @@ import os
 from collections.abc import Iterator
 
 from afford.data.format import DataError
-from afford.data.generate import ShardJob, ShardResult, make_shard
+from afford.data.shard import ShardJob, ShardResult, make_shard
 
 RETRIES = 3  # runs of a shard after the first, when its worker dies
 LOCAL_OBJECT_STORE = 256 * 2**20  # bytes; results are a few numbers, so a local instance needs little

@@ -16,7 +16,8 @@ import time
 from dataclasses import dataclass
 
 from afford.planning.goal import Goal
-from afford.planning.tree import Growth, SearchConfig, SearchResult, WorldModel, search
+from afford.planning.strategies import search
+from afford.planning.tree import Growth, SearchConfig, SearchResult, WorldModel
 from afford.sim.affordances import Affordance
 
 PROPOSALS = 32  # shortest canonical plans checked per task (drawn as the symbolic planner's sample)

@@ -13,9 +13,10 @@ import numpy as np
 from afford.planning.hybrid import PROPOSALS, plan_hybrid
 from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel, execute_plan
+from afford.planning.strategies import search
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
-from afford.planning.tree import SearchConfig, SearchResult, search
+from afford.planning.tree import SearchConfig, SearchResult
 from afford.planning.uncertain import EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES

@@ -7,9 +7,9 @@ state is scored against the goal image, eq. (5). The search is breadth-first to 
 and batched per depth level; the plan is the node of least loss (positive goal) or greatest
 loss (negative goal), eq. (4).
 
-Breadth-first is the paper's search; guided strategies that expand the states closest to the
-goal first (section V's "heuristics to constrain which branches are expanded") share its
-growing steps and are in `guided.py`.
+This module is the tree: its nodes, the two batched steps that grow it (`Growth`) and the
+choice of plan (eq. 4). How it is grown, breadth-first (the paper's) or guided (section V's
+"heuristics to constrain which branches are expanded"), is `strategies.py`, above it.
 
 The search knows the world only through a `WorldModel`: the simulator (the oracle) and the
 learned EM*D pathway both implement it, so the same search runs on either.
@@ -96,7 +96,7 @@ class SearchConfig:
     # The most states a tree may hold: a depth expected to pass it is refused before it is
     # grown (TreeTooLarge says by how much). The paper's tasks need at most ~700. None: no limit.
     max_nodes: int | None = 20_000
-    # How the tree grows (planning/guided.py): "breadth" (the paper's), "beam" or "best-first".
+    # How the tree grows (planning/strategies.py): "breadth" (the paper's), "beam" or "best-first".
     strategy: str = "breadth"
     beam_width: int = 16  # beam: the nodes of each depth kept for expansion
     # The most states grown: None gives the guided strategies GUIDED_BUDGET and breadth-first
@@ -234,46 +234,6 @@ class Growth:
         best = choose(self.nodes, self.goal, self.config.tie_tolerance)
         seconds = time.perf_counter() - self.start
         return SearchResult(self.nodes, best, seconds, self.expanded, per_depth, self.truncated)
-
-
-def search(
-    model: WorldModel, goal: Goal, max_steps: int, config: SearchConfig = SearchConfig()
-) -> SearchResult:
-    """Grow a tree to at most `max_steps` by `config.strategy` and pick the plan for `goal`."""
-    from afford.planning.guided import STRATEGIES  # they build on this module's Growth
-
-    if config.strategy not in STRATEGIES:
-        raise ValueError(f"unknown search {config.strategy!r}; expected one of {', '.join(STRATEGIES)}")
-    return STRATEGIES[config.strategy](Growth(model, goal, config), max_steps)
-
-
-def breadth_first(tree: Growth, max_steps: int) -> SearchResult:
-    """The paper's search: every node of a depth expanded before the next depth."""
-    config = tree.config
-    frontier, per_depth = [0], [1]
-    for depth in range(max_steps):
-        if config.max_nodes is not None and depth > 0:
-            # Before recognising: the last level's branching factor, carried one level on.
-            branching = per_depth[-1] / max(per_depth[-2], 1)
-            _refuse(depth, len(tree.nodes), len(frontier) * branching, config.max_nodes, "about ")
-        children = tree.recognise(frontier, f"depth {depth + 1}/{max_steps}: recognise")
-        if config.max_nodes is not None:
-            _refuse(depth, len(tree.nodes), len(children), config.max_nodes, "")  # now exact
-        if config.budget is not None and len(children) > tree.room():
-            children, tree.truncated = children[: tree.room()], True
-        frontier = tree.predict(children, f"depth {depth + 1}/{max_steps}: predict")
-        per_depth.append(len(frontier))
-        if not frontier or tree.truncated:
-            break
-    return tree.result(per_depth)
-
-
-def _refuse(depth: int, have: int, adds: float, limit: int, about: str) -> None:
-    if have + adds > limit:
-        raise TreeTooLarge(
-            f"depth {depth + 1} would add {about}{adds:,.0f} states to the {have:,} grown (limit {limit:,}): "
-            "plan fewer steps, or raise the limit (--max-nodes)"
-        )
 
 
 def choose(nodes: list[Node], goal: Goal, tie_tolerance: float) -> int:

@@ -12,10 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from afford.sim.constants import BALL, BLOCK, CUP, LIMITS, SUPPORT, WORK_AREA
-from afford.sim.scene import REST_HALF_HEIGHT, ObjectSpec
+from afford.sim.constants import BLOCK, LIMITS, SUPPORT, WORK_AREA
+from afford.sim.specs import FOOTPRINT, REST_HALF_HEIGHT, ObjectSpec
 
-FOOTPRINT = {"cup": CUP.radius, "ball": BALL.radius, "support": float(np.hypot(*SUPPORT.half[:2]))}
 SUPPORT_TOP = 2 * SUPPORT.half[2]
 
 

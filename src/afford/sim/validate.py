@@ -23,7 +23,7 @@ import numpy as np
 
 from afford.sim import camera as cam
 from afford.sim.constants import BLOCK, LIMITS, TABLE
-from afford.sim.layout import FOOTPRINT as LAYOUT_FOOTPRINT
+from afford.sim.specs import FOOTPRINT, SceneError
 
 PENETRATION = 0.005  # metres of overlap allowed (settling pushes that much apart harmlessly)
 FLOAT = 0.02  # metres of air allowed under an object's lowest point
@@ -31,7 +31,6 @@ RAY_START = 0.005  # rays start this far above the lowest point, outside whateve
 MAX_HEIGHT = 0.5  # metres above the table: no start pose is higher
 # A horizontal radius that holds each kind, upright (the layouts' footprints); the block's is
 # its width: its length may overhang the view's edge.
-FOOTPRINT = LAYOUT_FOOTPRINT | {"block": BLOCK.half[1]}
 LIMIT = {"cup": LIMITS.cups, "ball": LIMITS.balls, "support": LIMITS.supports, "block": LIMITS.blocks}
 
 
@@ -41,8 +40,6 @@ def label(index: int, name: str, where: str) -> str:
 
 def check_numbers(specs: Sequence, where: str = "") -> list[str]:
     """The names the objects get (cup0, ...); raises on non-finite numbers and too many of a kind."""
-    from afford.sim.scene import SceneError
-
     counts = {k: 0 for k in LIMIT}
     names = []
     for i, s in enumerate(specs):
@@ -70,8 +67,6 @@ def _numbers(values) -> str:
 
 def check_place(specs: Sequence, names: list[str], where: str = "") -> None:
     """Centre over the table, in the camera's view, and not high in the air."""
-    from afford.sim.scene import SceneError
-
     lo = np.subtract(TABLE.centre, TABLE.half)
     hi = np.add(TABLE.centre, TABLE.half)
     for i, (s, name) in enumerate(zip(specs, names, strict=True)):
@@ -93,8 +88,6 @@ def check_place(specs: Sequence, names: list[str], where: str = "") -> None:
 def check_contacts(scene, names: list[str], where: str = "") -> None:
     """With the objects posed and `mj_forward` run (nothing simulated): interpenetration and
     support, from MuJoCo's contacts and rays."""
-    from afford.sim.scene import SceneError
-
     model, data = scene.model, scene.data
     body_of = {scene.body_id(n): n for n in names}
     table = model.geom("table").id

@@ -2,52 +2,24 @@
 the detector looks for it, what the gripper does there, its canonical effect (the symbolic
 baseline's model), its execution parameters and how pictures draw it.
 
-Each type lives in its own module and registers itself; the registration order is the type's
+Each type lives in its own module and registers itself (`base.register`); the registration order is the type's
 index in the data (`format.Col.TYPE`), so new types go last. A fourth type is its module plus
 its line at the bottom of this file.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+# The type modules register themselves as they are imported: this order is the type index.
+from afford.sim.affordance_types import grasp, place, turn  # noqa: F401
 
-
-@dataclass(frozen=True)
-class AffordanceType:
-    name: str
-    holding: bool  # commenced while holding an object (else with the gripper empty)
-    # Candidates at one object: find(scene, obj, consider, held_kind) calls
-    # consider(type, point, tcp, angles, symmetric) for each; the detector keeps the reachable,
-    # collision-free ones.
-    find: Callable
-    # At the commencement pose: act(scene, arm, affordance, tcp, q_at) -> message ("" if fine).
-    act: Callable
-    # The canonical effect on a symbolic state: canonical(world, state, affordance).
-    canonical: Callable
-    parameters: tuple[int, ...] = ()  # execution parameters the planner fills in (II.D)
-    tcp_above: Callable | None = None  # tcp_above(scene): how far above the point the TCP goes
-    colour: tuple[int, int, int] = (255, 255, 255)  # marker colour in pictures
-    marker: float = 2.0  # marker radius in pictures, image pixels
-
-
-REGISTRY: dict[str, AffordanceType] = {}
-
-
-def register(kind: AffordanceType) -> AffordanceType:
-    REGISTRY[kind.name] = kind
-    return kind
-
-
-def type_index(name: str) -> int:
-    """A type's index in the data: its place in the registration order."""
-    return list(REGISTRY).index(name)
-
-
-def type_name(index: int) -> str:
-    return list(REGISTRY)[index]
-
-
-from afford.sim.affordance_types import grasp, place, turn  # noqa: E402, F401  (order = type index)
+# The record and the registry sit in `base`, which the type modules import, so nothing
+# imports back up into this file.
+from afford.sim.affordance_types.base import (  # noqa: F401
+    REGISTRY,
+    AffordanceType,
+    register,
+    type_index,
+    type_name,
+)
 
 TYPES = tuple(REGISTRY)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from afford.sim.affordance_types import AffordanceType, register
+from afford.sim.affordance_types.base import AffordanceType, register
 from afford.sim.constants import BLOCK, MOTION, SUPPORT, TOLERANCES
 from afford.sim.geometry import QUARTER_TURNS, rotation, top_point
 

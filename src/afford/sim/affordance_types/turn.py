@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from afford.sim.affordance_types import AffordanceType, register
+from afford.sim.affordance_types.base import AffordanceType, register
 from afford.sim.affordance_types.grasp import act as grasp_act
 from afford.sim.affordance_types.grasp import block_angle
 from afford.sim.constants import MOTION

@@ -1,0 +1,117 @@
+"""One shard of a dataset: its sequences made in one simulator and written in one file.
+
+The unit of work that every executor hands out (`generate.py`'s local pool, `ray_executor.py`'s
+Ray tasks). Sequence i draws everything from its own generator seeded by (seed, i), and the
+simulator is reset before it, so a shard's bytes depend only on its job, never on the worker.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from afford.data.format import AFF_WIDTH, Sequence, encode_affordance, quantise, shard_path, write_shard
+from afford.sim.affordances import parametrise
+from afford.sim.layout import LayoutConfig, random_layout
+from afford.sim.scene import Scene
+
+
+def pose_array(scene: Scene) -> np.ndarray:
+    rows = []
+    for o in scene.objects(present_only=False):
+        rows.append(np.concatenate([o.pos, o.quat]) if o.present else np.full(7, np.nan))
+    return np.array(rows, dtype=np.float32)
+
+
+TURN_ANGLES = ("quarter", "continuous")
+
+
+def make_sequence(
+    scene: Scene, seed: int, index: int, max_steps: int, turn_angles: str = "quarter"
+) -> tuple[Sequence, int]:
+    """Sequence `index` of the dataset with `seed`, and how many drawn executions failed."""
+    rng = np.random.default_rng([seed, index])
+    scene.reset(random_layout(rng, LayoutConfig()), check=False)  # free of overlaps by construction
+    slots = tuple(name for name, _ in scene.slots)
+    rgbs, depths, lists, actions, held, poses = [], [], [], [], [], []
+    failed = 0
+    for step in range(max_steps + 1):
+        rgb, depth = quantise(scene.observe())
+        affs = scene.affordances()
+        rgbs.append(rgb)
+        depths.append(depth)
+        lists.append(np.array([encode_affordance(a) for a in affs], dtype=np.float32).reshape(-1, AFF_WIDTH))
+        held.append(slots.index(scene.held) if scene.held else -1)
+        poses.append(pose_array(scene))
+        if step == max_steps:
+            break
+        # Draw from the list with turn parameters filled in (paper II.D); an affordance the
+        # arm cannot carry out is put back to the scene as it was and another is drawn.
+        candidates = parametrise(affs)
+        if turn_angles == "continuous":
+            # Each +-90 becomes an angle of its sign and a random size: still one each way.
+            candidates = [
+                a.with_turn(float(np.sign(a.turn) * rng.uniform(1.0, 180.0))) if a.turn else a
+                for a in candidates
+            ]
+        executed = None
+        while candidates and executed is None:
+            a = candidates.pop(int(rng.integers(len(candidates))))
+            snap = scene.snapshot()
+            if scene.execute(a).executed:
+                executed = a
+            else:
+                failed += 1
+                scene.restore(snap)
+        if executed is None:
+            break
+        actions.append(encode_affordance(executed))
+    seq = Sequence(
+        index=index,
+        rgb=np.stack(rgbs),
+        depth=np.stack(depths),
+        affordances=lists,
+        actions=np.array(actions, dtype=np.float32).reshape(-1, AFF_WIDTH),
+        held=np.array(held, dtype=np.int8),
+        poses=np.stack(poses),
+        slots=slots,
+    )
+    return seq, failed
+
+
+@dataclass(frozen=True)
+class ShardJob:
+    root: str  # the dataset folder, as the worker sees it (shared storage on a cluster)
+    shard: int
+    start: int  # first sequence index
+    stop: int
+    seed: int
+    max_steps: int
+    turn_angles: str = "quarter"
+
+
+@dataclass(frozen=True)
+class ShardResult:
+    shard: int
+    sequences: int
+    executions: int
+    failed: int
+
+
+_worker_scene: Scene | None = None  # one simulator per worker process, made on its first shard
+
+
+def make_shard(job: ShardJob) -> ShardResult:
+    """Make and write one shard; writing it again gives the same bytes, so a retried job is harmless."""
+    global _worker_scene
+    if _worker_scene is None:
+        _worker_scene = Scene()
+    seqs, failed = [], 0
+    for i in range(job.start, job.stop):
+        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps, job.turn_angles)
+        seqs.append(seq)
+        failed += f
+    write_shard(shard_path(Path(job.root), job.shard), seqs)
+    return ShardResult(job.shard, len(seqs), sum(s.length for s in seqs), failed)

@@ -37,11 +37,12 @@ def main() -> None:
     import matplotlib.pyplot as plt
 
     from afford.planning.angles import optimise_turns
-    from afford.planning.learned import LearnedModel, load_learned
+    from afford.planning.learned import LearnedModel
     from afford.planning.run import solve
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
+    from afford.shipped import load_learned
     from afford.sim.scene import Scene
 
     learned = load_learned(args.weights)

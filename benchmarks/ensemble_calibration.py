@@ -38,8 +38,8 @@ def main() -> None:
     import torch
 
     from afford.data.format import Dataset
-    from afford.planning.learned import load_learned
     from afford.prediction.ensemble import calibrate, spearman
+    from afford.shipped import load_learned
 
     members = load_learned(args.weights).members
     torch.set_num_threads(members[0].config.threads)

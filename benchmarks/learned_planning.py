@@ -15,10 +15,11 @@ import json
 
 import torch
 
-from afford.planning.learned import LearnedModel, load_learned
+from afford.planning.learned import LearnedModel
 from afford.planning.strategies import search
 from afford.planning.tasks import load_task
 from afford.planning.tree import SearchConfig
+from afford.shipped import load_learned
 from afford.sim.scene import Scene
 
 

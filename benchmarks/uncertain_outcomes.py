@@ -43,12 +43,12 @@ def main() -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from afford.planning.learned import load_learned
     from afford.planning.run import execute_perturbed, perturbed_successes, solve
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
     from afford.planning.uncertain import EnsembleModel
+    from afford.shipped import load_learned
     from afford.sim.perturb import Perturbation
     from afford.sim.scene import Scene
 

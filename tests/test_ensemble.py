@@ -146,7 +146,7 @@ def test_bad_perturb_and_missing_members_are_one_line_errors(tmp_path, capsys):
 def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, capsys):
     from dataclasses import asdict
 
-    from afford.planning.learned import load_learned
+    from afford.shipped import load_learned
     from afford.training.checkpoint import save_checkpoint
 
     torch.manual_seed(0)
@@ -178,8 +178,8 @@ def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, cap
 def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(scene):
     """The premise of tasks/uncertain/01: the cup placed at the block's right end stays up as
     planned, but lands too far out when the pile stands 6 mm left of where the plan aimed."""
-    from afford.planning.predicates import rests_on
     from afford.planning.tasks import load_task
+    from afford.sim.resting import rests_on
 
     task = load_task("tasks/uncertain/01-cup-near-a-tipping-edge.json", scene)
     scene.reset(task.scene)
@@ -198,9 +198,9 @@ def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(s
 
 
 def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scene):
-    from afford.planning.learned import load_learned
     from afford.planning.run import solve
     from afford.planning.tasks import load_task
+    from afford.shipped import load_learned
 
     nets = load_learned()
     assert len(nets.members) == 4 and nets.members[0] is nets.predictor

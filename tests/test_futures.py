@@ -10,8 +10,8 @@ import torch
 
 from afford.cli.main import main
 from afford.data.format import Dataset
-from afford.planning.learned import load_learned
 from afford.prediction.futures import BASELINES, future_recall
+from afford.shipped import load_learned
 
 
 @pytest.fixture(scope="module")

@@ -121,10 +121,10 @@ def test_plan_with_learned_weights_folder(scene, tmp_path, capsys):
 def test_shipped_weights_plan_a_paper_task_that_needs_a_non_canonical_effect(scene):
     """End to end, the paper's method: recognise on the real image, predict, recognise on the
     predicted images, match the goal, execute the plan in the simulator, judge it."""
-    from afford.planning.learned import load_learned
     from afford.planning.run import solve
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
+    from afford.shipped import load_learned
 
     torch.set_num_threads(2)
     task = load_task(Path(__file__).parents[1] / "tasks" / "paper" / DEMO_TASK, scene)
@@ -139,8 +139,8 @@ def test_diagnosis_names_recognition_when_the_working_plan_is_not_recognised(sce
     from test_tasks import GOOD
 
     from afford.planning.diagnose import diagnose
-    from afford.planning.learned import LearnedNets
     from afford.planning.tasks import task_from_json
+    from afford.shipped import LearnedNets
 
     torch.manual_seed(0)
     recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.999)

@@ -187,8 +187,8 @@ def test_spatial_action_maps_peak_at_the_affordance_pixel():
 def test_shipped_weights_predict_a_grasp_at_the_object_and_in_the_gripper(scene):
     from scenarios import find
 
-    from afford.planning.learned import PREDICTION_FILE, WEIGHTS
     from afford.prediction.evaluate import load_net
+    from afford.shipped import PREDICTION_FILE, WEIGHTS
     from afford.sim.scene import ObjectSpec
 
     net, config = load_net(WEIGHTS / PREDICTION_FILE)

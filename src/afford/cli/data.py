@@ -188,8 +188,8 @@ def cmd_data_predict(args) -> int:
 
     from afford.data.format import Dataset
     from afford.data.predicted import predict_states
-    from afford.planning.learned import PREDICTION_FILE, WEIGHTS
     from afford.prediction.evaluate import load_net
+    from afford.shipped import PREDICTION_FILE, WEIGHTS
 
     if args.sequences is not None and args.sequences < 1:
         raise CLIError("--sequences must be at least 1")

@@ -299,7 +299,7 @@ def cmd_diagnose(args) -> int:
 
 def _learned(args):
     """The trained nets for the learned planner: --weights, or the ones shipped in the package."""
-    from afford.planning.learned import load_learned
+    from afford.shipped import load_learned
 
     try:
         return load_learned(args.weights)

@@ -84,7 +84,7 @@ def cmd_eval(args) -> int:
         from afford.prediction.evaluate import evaluate, format_table
 
         if args.run is None:
-            from afford.planning.learned import PREDICTION_FILE, WEIGHTS
+            from afford.shipped import PREDICTION_FILE, WEIGHTS
 
             checkpoint, folder = WEIGHTS / PREDICTION_FILE, Path(args.out)
         else:
@@ -111,7 +111,7 @@ def _report(args, result: dict, folder: Path, record: str, pictures: str, text: 
 
 
 def _load_weights(weights: str | None):
-    from afford.planning.learned import load_learned
+    from afford.shipped import load_learned
 
     try:
         return load_learned(weights)
@@ -152,17 +152,17 @@ def cmd_export(args) -> int:
     float16 (half the size, the same predictions to the eye); the recognition net stays in
     float32, since float16 moved detections across the cut-off (one of 797 on the train
     states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
-    from afford.planning.learned import PREDICTION_FILE, RECOGNITION_FILE
     from afford.prediction.ensemble import MEMBERS_DIR
-    from afford.recognition.infer import THRESHOLD_FILE
+    from afford.recognition.infer import read_threshold
+    from afford.shipped import PREDICTION_FILE, RECOGNITION_FILE
     from afford.training.checkpoint import export_weights
 
     rec_run, pred_run = Path(args.recognition), Path(args.prediction)
     members = [Path(m) for m in args.member or ()]
     for run in (rec_run, pred_run, *members):
         _check_run(str(run))
-    threshold_file = rec_run / THRESHOLD_FILE
-    extra = json.loads(threshold_file.read_text()) if threshold_file.is_file() else {}
+    threshold = read_threshold(rec_run)
+    extra = {} if threshold is None else {"threshold": threshold, "tuned_on": "val"}
     out = Path(args.out)
     sizes = {
         RECOGNITION_FILE: export_weights(

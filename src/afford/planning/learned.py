@@ -10,45 +10,21 @@ both give the same states (up to float rounding), the first is faster.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import torch
 
 from afford.data.format import encode_affordance
 from afford.planning.tree import Node, Recognised
-from afford.prediction.evaluate import load_net as load_prediction
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
 from afford.sim.affordances import Affordance
-
-WEIGHTS = Path(__file__).resolve().parent.parent / "weights"  # shipped with the package
-RECOGNITION_FILE = "recognition.safetensors"
-PREDICTION_FILE = "prediction.safetensors"
 
 
 @dataclass
 class LatentState:
     latent: torch.Tensor  # c_i: (latent,) for the dense net, (channels, 16, 16) for the spatial one
     memory: torch.Tensor  # the memory trace, shaped likewise
-
-
-def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
-    """The recognition and prediction checkpoints in a folder (default: the shipped ones).
-
-    A folder may also be a pair of training runs: recognition/ and prediction/ inside it, each
-    with best.safetensors.
-    """
-    root = Path(weights) if weights else WEIGHTS
-    flat = (root / RECOGNITION_FILE, root / PREDICTION_FILE)
-    runs = (root / "recognition" / "best.safetensors", root / "prediction" / "best.safetensors")
-    for rec, pred in (flat, runs):
-        if rec.is_file() and pred.is_file():
-            return rec, pred
-    raise FileNotFoundError(
-        f"{root}: no weights ({RECOGNITION_FILE} and {PREDICTION_FILE}, or recognition/ and "
-        "prediction/ runs with best.safetensors)"
-    )
 
 
 class LearnedModel:
@@ -119,33 +95,3 @@ def to_chw(images: np.ndarray) -> torch.Tensor:
     """(B, H, W, C) images as the nets' float32 (B, C, H, W) tensor."""
     return torch.from_numpy(np.ascontiguousarray(images, dtype=np.float32)).permute(0, 3, 1, 2)
 
-
-@dataclass
-class LearnedNets:
-    """The trained nets of a weights folder."""
-
-    recognizer: Recognizer  # with its tuned cut-off
-    predictor: PredictionNet
-    # The prediction nets of the ensemble planner (prediction/ensemble.py): the predictor
-    # first, then the folder's ensemble/ members; just the predictor when it has none.
-    members: tuple[PredictionNet, ...] = ()
-
-
-def load_learned(weights: str | Path | None = None) -> LearnedNets:
-    """The recognizer, the prediction net and the ensemble's members from a weights folder
-    (default: the shipped one)."""
-    import json
-
-    from afford.prediction.ensemble import check_members, member_paths
-    from afford.recognition.infer import THRESHOLD_FILE, load_net
-
-    rec_path, pred_path = find_weights(weights)
-    net, config, meta = load_net(rec_path)
-    threshold = meta.get("extra", {}).get("threshold")  # set by `afford export`
-    tuned = rec_path.parent / THRESHOLD_FILE
-    if threshold is None and tuned.is_file():
-        threshold = json.loads(tuned.read_text())["threshold"]
-    predictor, _ = load_prediction(pred_path)
-    members = [predictor] + [load_prediction(p)[0].eval() for p in member_paths(pred_path.parent)]
-    check_members(members)
-    return LearnedNets(Recognizer(net, config, threshold), predictor, tuple(members))

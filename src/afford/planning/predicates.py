@@ -22,16 +22,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
-from afford.sim.constants import BLOCK, SUPPORT, TOLERANCES
+from afford.sim.constants import TOLERANCES
+from afford.sim.resting import HOST_HALF, rests_on
 
 HIDDEN_PIXELS = 3  # a few stray pixels at an edge do not make an object visible
 UPRIGHT_COS = TOLERANCES.upright_cos
-ON_GAP = (-0.012, 0.02)  # metres between the object's lowest point and the host's top
-ON_MARGIN = 0.01  # the object's centre may overhang the host's top face by this much
-HOST_HALF = {"support": SUPPORT.half, "block": BLOCK.half}
 
 
 class PredicateError(ValueError):
@@ -96,27 +93,6 @@ def _yaw(p: Predicate, scene, see: bool) -> bool:
 
 def _on(p: Predicate, scene, see: bool) -> bool:
     return rests_on(scene, p.args["object"], p.args["host"])
-
-
-def rests_on(scene, name: str, host: str) -> bool:
-    """Does object `name` rest on the top of `host` (a support, the block, or "table")?"""
-    o = scene.object(name)
-    if not o.present or o.held:
-        return False
-    low = scene.lowest_point(o.name)
-    if host == "table":
-        return bool(low < ON_GAP[1])
-    h = scene.object(host)
-    if not h.present or h.held or h.kind not in HOST_HALF:
-        return False
-    top = scene.highest_point(host)
-    if not ON_GAP[0] <= low - top <= ON_GAP[1]:
-        return False
-    rot = np.zeros(9)
-    mujoco.mju_quat2Mat(rot, h.quat)
-    local = rot.reshape(3, 3).T @ (o.pos - h.pos)
-    half = HOST_HALF[h.kind]
-    return bool(abs(local[0]) <= half[0] + ON_MARGIN and abs(local[1]) <= half[1] + ON_MARGIN)
 
 
 def _upright(p: Predicate, scene, see: bool) -> bool:

@@ -60,7 +60,7 @@ def _init(spec: BenchSpec) -> None:
     _state["spec"] = spec
     _state["scene"] = Scene()
     if any(p in USES_NETS for p in spec.planners):
-        from afford.planning.learned import load_learned
+        from afford.shipped import load_learned
 
         _state["learned"] = load_learned(spec.weights)
 

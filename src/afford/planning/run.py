@@ -102,7 +102,7 @@ def _oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
 def _nets(learned):
     """The `LearnedNets` given, or the weights shipped in the package."""
     if learned is None:
-        from afford.planning.learned import load_learned
+        from afford.shipped import load_learned
 
         return load_learned()
     return learned

@@ -23,12 +23,13 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from afford.planning.predicates import Predicate, rests_on
+from afford.planning.predicates import Predicate
 from afford.planning.tree import edges
 from afford.sim.affordance_types import REGISTRY
 from afford.sim.affordances import Affordance
 from afford.sim.camera import world_to_pixel
 from afford.sim.constants import MOTION, TOLERANCES
+from afford.sim.resting import rests_on
 from afford.sim.scene import ObjectSpec, Scene
 
 SYMBOLIC_SAMPLES = 8  # shortest canonical plans executed to judge the baseline

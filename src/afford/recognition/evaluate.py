@@ -89,7 +89,7 @@ def evaluate(
 def evaluate_shipped(data_dir: str | Path, out: Path, pictures: int = 6) -> dict:
     """Table 1 for the weights shipped in the package, at their shipped cut-off (nothing is
     tuned: a user checks the shipped net on their own data)."""
-    from afford.planning.learned import load_learned
+    from afford.shipped import load_learned
 
     recognizer = load_learned().recognizer
     result = {"run": "shipped", "threshold": recognizer.threshold}

@@ -18,6 +18,12 @@ KIND = "recognition"
 THRESHOLD_FILE = "threshold.json"  # written by `afford eval recognition` (tuned on val)
 
 
+def read_threshold(run: str | Path) -> float | None:
+    """The cut-off tuned on val for a training run (`afford eval recognition`), if any."""
+    path = Path(run) / THRESHOLD_FILE
+    return json.loads(path.read_text())["threshold"] if path.is_file() else None
+
+
 def load_net(path: str | Path) -> tuple[RecognitionNet, RecognitionConfig, dict]:
     return load_net_from_checkpoint(path, KIND, RecognitionConfig, RecognitionNet)
 
@@ -34,10 +40,7 @@ class Recognizer:
     def from_run(cls, run: str | Path, checkpoint: str = "last.safetensors") -> Recognizer:
         run = Path(run)
         net, config, _ = load_net(run / checkpoint)
-        threshold = None
-        if (run / THRESHOLD_FILE).is_file():
-            threshold = json.loads((run / THRESHOLD_FILE).read_text())["threshold"]
-        return cls(net, config, threshold)
+        return cls(net, config, read_threshold(run))
 
     @torch.no_grad()
     def raw(self, images: np.ndarray | torch.Tensor, batch_size: int = 256) -> torch.Tensor:

@@ -17,7 +17,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from afford.sim.resting import HOST_HALF, rests_on
 from afford.sim.scene import ObjectSpec, Scene, SceneError
+from afford.sim.validate import check_numbers
 
 TRIES = 50  # draws before a start is given up as too crowded to perturb
 CLIP = 2.0  # offsets beyond this many standard deviations are drawn again
@@ -68,8 +70,6 @@ def _clipped(rng: np.random.Generator, n: int) -> np.ndarray:
 def piles(scene: Scene, specs: list[ObjectSpec]) -> list[int]:
     """For each object of `specs`, the index of the object at the bottom of its pile, read
     from the settled start (what rests on a support or the block)."""
-    from afford.planning.predicates import HOST_HALF, rests_on
-    from afford.sim.validate import check_numbers
 
     scene.reset(specs)
     names = check_numbers(specs)

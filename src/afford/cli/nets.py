@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from afford.cli.errors import CLIError
+from afford.cli.options import add_weights_argument, load_nets
 
 
 def cmd_train(args) -> int:
@@ -93,7 +94,7 @@ def cmd_eval(args) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         recognizer = None
         if not args.no_futures:
-            recognizer = _load_weights(args.recognition).recognizer
+            recognizer = load_nets(args.recognition).recognizer
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
     _report(args, result, folder, *EVALS[args.net], format_table(result))
     return 0
@@ -110,15 +111,6 @@ def _report(args, result: dict, folder: Path, record: str, pictures: str, text: 
         print(f"pictures: {folder / pictures}/; record: {folder / record}")
 
 
-def _load_weights(weights: str | None):
-    from afford.shipped import load_learned
-
-    try:
-        return load_learned(weights)
-    except FileNotFoundError as e:
-        raise CLIError(str(e)) from None
-
-
 def cmd_futures(args) -> int:
     """Recognition on predicted futures, beside the true states and copying the start."""
     import torch
@@ -126,7 +118,7 @@ def cmd_futures(args) -> int:
     from afford.data.format import Dataset
     from afford.prediction.futures import BASELINES, format_report, future_recalls, net_predictor, pictures
 
-    nets = _load_weights(args.weights)
+    nets = load_nets(args.weights)
     recognizer, net = nets.recognizer, nets.predictor
     torch.set_num_threads(net.config.threads)
     data = Dataset(args.data)
@@ -284,12 +276,7 @@ def add_parsers(sub) -> None:
         "predicted states to OUT/futures/.",
     )
     f.add_argument("--data", required=True, metavar="DIR")
-    f.add_argument(
-        "--weights",
-        metavar="DIR",
-        help="a weights folder from `afford export`, or one holding recognition/ and prediction/ runs "
-        "(default: the shipped weights)",
-    )
+    add_weights_argument(f, detail=True)
     f.add_argument(
         "--limit", type=int, metavar="N", help="evaluate N test sequences, evenly spread (default all)"
     )

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from afford.errors import UserError
 from afford.sim.affordance_types import type_index, type_name
 from afford.sim.affordances import Affordance
 
@@ -54,7 +55,7 @@ POSE_COLUMNS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 SPLITS = ("train", "val", "test")
 
 
-class DataError(ValueError):
+class DataError(UserError):
     """A dataset that cannot be read: missing, corrupt, or of another format version."""
 
 

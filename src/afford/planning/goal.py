@@ -12,10 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from afford.errors import UserError
+
 CHANNELS = {"rgbd": 4, "rgb": 3}
 
 
-class GoalError(ValueError):
+class GoalError(UserError):
     """A goal that cannot be used; the message names the problem."""
 
 

@@ -94,4 +94,3 @@ def recognise_nodes(recognizer: Recognizer, nodes: list[Node]) -> list[Recognise
 def to_chw(images: np.ndarray) -> torch.Tensor:
     """(B, H, W, C) images as the nets' float32 (B, C, H, W) tensor."""
     return torch.from_numpy(np.ascontiguousarray(images, dtype=np.float32)).permute(0, 3, 1, 2)
-

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from afford.errors import UserError
 from afford.sim.constants import TOLERANCES
 from afford.sim.resting import HOST_HALF, rests_on
 
@@ -31,7 +32,7 @@ HIDDEN_PIXELS = 3  # a few stray pixels at an edge do not make an object visible
 UPRIGHT_COS = TOLERANCES.upright_cos
 
 
-class PredicateError(ValueError):
+class PredicateError(UserError):
     """A predicate that cannot be read; the message names the field."""
 
 

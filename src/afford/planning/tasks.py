@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from afford.errors import UserError
 from afford.planning.goal import CHANNELS, Goal, GoalError
 from afford.planning.predicates import Predicate, PredicateError, parse
 from afford.sim import camera as cam
@@ -39,7 +40,7 @@ TASK_FORMAT = 1
 MAX_STEPS_LIMIT = 8
 
 
-class TaskError(ValueError):
+class TaskError(UserError):
     """A task file that cannot be used; the message names the file and the field."""
 
 

@@ -24,6 +24,7 @@ from typing import Any, Protocol
 import numpy as np
 from tqdm import tqdm
 
+from afford.errors import UserError
 from afford.planning.goal import Goal
 from afford.sim.affordances import Affordance, parametrise
 from afford.sim.constants import TOLERANCES
@@ -114,7 +115,7 @@ class SearchConfig:
     risk: float = RISK
 
 
-class TreeTooLarge(ValueError):
+class TreeTooLarge(UserError):
     """A depth of the tree would pass `SearchConfig.max_nodes`; the message gives the estimate."""
 
 

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from afford.data.format import encode_affordance
+from afford.errors import UserError
 from afford.planning.goal import Goal
 from afford.planning.learned import recognise_nodes, to_chw
 from afford.planning.tree import Node, Recognised
@@ -27,7 +28,7 @@ from afford.recognition.infer import Recognizer
 from afford.sim.affordances import Affordance
 
 
-class EnsembleError(ValueError):
+class EnsembleError(UserError):
     """An ensemble planner without an ensemble; the message says where members go."""
 
 

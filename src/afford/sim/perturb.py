@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from afford.errors import UserError
 from afford.sim.resting import HOST_HALF, rests_on
 from afford.sim.scene import ObjectSpec, Scene, SceneError
 from afford.sim.validate import check_numbers
@@ -25,7 +26,7 @@ TRIES = 50  # draws before a start is given up as too crowded to perturb
 CLIP = 2.0  # offsets beyond this many standard deviations are drawn again
 
 
-class PerturbError(ValueError):
+class PerturbError(UserError):
     """No perturbed start was free of overlaps in TRIES draws."""
 
 

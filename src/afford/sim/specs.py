@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from afford.errors import UserError
 from afford.sim.constants import BALL, BLOCK, CUP, SUPPORT
 
 REST_HALF_HEIGHT = {
@@ -23,7 +24,7 @@ REST_HALF_HEIGHT = {
 SCENE_FORMAT = 1
 
 
-class SceneError(ValueError):
+class SceneError(UserError):
     """A scene description that cannot be loaded; the message names the problem."""
 
 

@@ -23,11 +23,13 @@ import torch.distributed as dist
 from torch import nn
 from torch.utils.data import Sampler
 
+from afford.errors import UserError
+
 BACKENDS = {"cpu": "gloo", "cuda": "nccl"}  # torch's collective backend for each kind of device
 DEVICES = ("auto", "cpu", "cuda")
 
 
-class DistributedError(ValueError):
+class DistributedError(UserError):
     """A run that cannot be placed or split over torchrun's ranks as asked."""
 
 

@@ -5,8 +5,10 @@ from __future__ import annotations
 import dataclasses
 import typing
 
+from afford.errors import UserError
 
-class OverrideError(ValueError):
+
+class OverrideError(UserError):
     """A --set that names no field of the config, or a value of the wrong type."""
 
 

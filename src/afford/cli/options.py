@@ -1,0 +1,164 @@
+"""Options that several commands share: --weights, the planners, the search, perturbations."""
+
+from __future__ import annotations
+
+from afford.cli.errors import CLIError
+
+PLANNERS_HELP = (
+    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble), several as a comma list, "
+    "or all"
+)
+MAX_NODES_HELP = (
+    "refuse to grow a tree past this many states, with the estimate, before growing the depth that "
+    "would pass it (default 20,000; 0: no limit; the paper's tasks need at most ~700)"
+)
+
+
+def add_weights_argument(parser, detail: bool = False) -> None:
+    """--weights: the learned planners' nets (default: the ones shipped in the package)."""
+    parser.add_argument(
+        "--weights",
+        "--run-dir",
+        metavar="DIR",
+        help="a folder with recognition.safetensors and prediction.safetensors, or with recognition/ and "
+        "prediction/ training runs (default: the weights shipped in the package)"
+        if detail
+        else "learned planners' weights (see afford plan)",
+    )
+
+
+def load_nets(weights: str | None):
+    """The trained nets of a weights folder (None: the ones shipped in the package); one line
+    if it holds none."""
+    from afford.shipped import load_learned
+
+    try:
+        return load_learned(weights)
+    except FileNotFoundError as e:
+        raise CLIError(str(e)) from None
+
+
+def planners(given: str) -> tuple[str, ...]:
+    from afford.planning.run import PLANNERS
+
+    if given == "all":
+        return PLANNERS
+    names = tuple(n.strip() for n in given.split(","))
+    unknown = [n for n in names if n not in PLANNERS]
+    if unknown:
+        raise CLIError(
+            f"unknown planner {unknown[0]!r}; expected {', '.join(PLANNERS)} or all, or a comma list"
+        )
+    return names
+
+
+def add_search_arguments(parser, max_nodes: bool = True) -> None:
+    """How the tree grows: the paper's breadth-first search, or a guided one (paper V)."""
+    from afford.planning.strategies import STRATEGIES
+    from afford.planning.tree import GUIDED_BUDGET, SearchConfig
+
+    parser.add_argument(
+        "--search",
+        choices=tuple(STRATEGIES),
+        default="breadth",
+        help="breadth: every branch, the paper's (default); beam: per depth the --beam-width states "
+        "closest to the goal (eq. 5) are expanded; best-first: the closest open states of any depth "
+        "first. Hybrid planners search this way when the world model rejects every canonical plan",
+    )
+    parser.add_argument(
+        "--beam-width",
+        type=int,
+        default=SearchConfig.beam_width,
+        metavar="K",
+        help="beam: states kept per depth",
+    )
+    parser.add_argument(
+        "--budget",
+        type=int,
+        metavar="N",
+        help=f"the most states grown (default: {GUIDED_BUDGET:,} for beam and best-first, none for breadth)",
+    )
+    parser.add_argument(
+        "--accept",
+        type=float,
+        default=SearchConfig.accept,
+        metavar="SHARE",
+        help="hybrid planners: a canonical plan is kept when its predicted outcome removes at least this "
+        f"share of the start's goal loss, eq. 5 (default {SearchConfig.accept})",
+    )
+    parser.add_argument(
+        "--optimise-turns",
+        action="store_true",
+        help="learned planner: optimise the turn angles of the best plan with turns by gradient descent "
+        "on eq. 5 through the prediction net (paper V), keeping it when it comes closer; needs a "
+        "prediction net trained on continuous turns (afford generate --turn-angles continuous)",
+    )
+    parser.add_argument(
+        "--risk",
+        type=float,
+        default=SearchConfig.risk,
+        metavar="W",
+        help="ensemble planner: a plan scores the members' mean goal loss (eq. 5) plus W standard "
+        f"deviations of it over the members: risk-averse (default {SearchConfig.risk}); 0: the mean alone",
+    )
+    if max_nodes:
+        parser.add_argument(
+            "--max-nodes", type=int, default=SearchConfig.max_nodes, metavar="N", help=MAX_NODES_HELP
+        )
+
+
+def add_perturb_arguments(parser) -> None:
+    """Executions from perturbed starts (sim/perturb.py): outcomes that succeed only sometimes."""
+    from afford.sim.perturb import Perturbation
+
+    parser.add_argument(
+        "--perturb",
+        type=str,
+        metavar="METRES[,DEGREES]",
+        help="after planning, execute the plan --executions times, each time with every pile of objects "
+        "shifted by a Gaussian of this standard deviation (and turned by DEGREES, default "
+        f"{Perturbation.yaw:g}), and report the share that succeed",
+    )
+    parser.add_argument(
+        "--executions", type=int, default=20, metavar="N", help="perturbed executions per plan (default 20)"
+    )
+
+
+def perturbation(args):
+    """The --perturb of the command line, or None."""
+    from afford.sim.perturb import Perturbation
+
+    if not getattr(args, "perturb", None):
+        return None
+    try:
+        sizes = [float(v) for v in args.perturb.split(",")]
+        if len(sizes) > 2:
+            raise ValueError
+        perturbation = Perturbation(*sizes)
+    except ValueError:
+        raise CLIError(f"--perturb {args.perturb!r}: expected METRES or METRES,DEGREES, both >= 0") from None
+    if args.executions < 1:
+        raise CLIError("--executions must be at least 1")
+    return perturbation
+
+
+def search_config(args, progress: bool):
+    from afford.planning.tree import SearchConfig
+
+    if args.beam_width < 1:
+        raise CLIError("--beam-width must be at least 1")
+    if args.budget is not None and args.budget < 1:
+        raise CLIError("--budget must be at least 1 state")
+    if not 0 < args.accept < 1:
+        raise CLIError("--accept must lie between 0 and 1")
+    max_nodes = getattr(args, "max_nodes", SearchConfig.max_nodes)
+    return SearchConfig(
+        progress=progress,
+        max_nodes=max_nodes or None,
+        strategy=args.search,
+        beam_width=args.beam_width,
+        budget=args.budget,
+        accept=args.accept,
+        optimise_turns=args.optimise_turns,
+        risk=args.risk,
+    )

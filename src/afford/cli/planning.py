@@ -1,0 +1,310 @@
+"""`afford plan`, `afford bench tasks|random` and `afford diagnose`: planning a task, many tasks,
+and why a learned plan failed."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+from afford.cli.errors import CLIError
+from afford.cli.options import (
+    PLANNERS_HELP,
+    add_perturb_arguments,
+    add_search_arguments,
+    add_weights_argument,
+    load_nets,
+    search_config,
+)
+from afford.cli.options import perturbation as perturbation_of
+from afford.cli.options import planners as planner_names
+
+
+def _outcome_line(o) -> str:
+    plan = "-" if o.plan is None else " > ".join(a.type + (f"{a.turn:+g}" if a.turn else "") for a in o.plan)
+    return f"{'solved' if o.success else 'FAILED'}: {plan}"
+
+
+def cmd_plan(args) -> int:
+    """Plan a task file, execute the plan in the simulator, draw it (paper Fig. 8)."""
+    from afford.planning.run import USES_NETS, execute_perturbed, solve
+    from afford.planning.tasks import load_task
+    from afford.sim.scene import Scene
+    from afford.viz.plan import plan_strip
+
+    scene = Scene()
+    task = load_task(args.task, scene)
+    perturbation = perturbation_of(args)
+    learned = load_nets(args.weights) if args.planner in USES_NETS else None
+    outcome = solve(task, args.planner, scene, search_config(args, progress=not args.json), learned)
+    if perturbation is not None:
+        execute_perturbed(outcome, task, scene, perturbation, args.executions)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    picture = out / f"{task.name}-{args.planner}.png"
+    plan_strip(outcome, task.goal, picture)
+    record = outcome.to_dict() | {"picture": str(picture)}
+    (out / f"{task.name}-{args.planner}.json").write_text(json.dumps(record, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(record, indent=2))
+    else:
+        print(f"{task.name} ({args.planner}) {_outcome_line(outcome)}")
+        print(
+            f"  {outcome.nodes} nodes, {outcome.seconds:.1f} s planning"
+            + (f"; {outcome.reason}" if outcome.reason else "")
+        )
+        if outcome.perturbed:
+            rate = sum(outcome.perturbed) / len(outcome.perturbed)
+            print(
+                f"  perturbed executions: {sum(outcome.perturbed)}/{len(outcome.perturbed)} "
+                f"succeed ({rate:.0%})"
+            )
+        print(f"  picture: {picture}")
+    scene.close()
+    return 0 if outcome.success else 1
+
+
+def cmd_bench_tasks(args) -> int:
+    """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
+    from afford.planning.run import USES_NETS, execute_perturbed, solve
+    from afford.planning.tasks import load_task
+    from afford.sim.scene import Scene
+    from afford.viz.plan import plan_strip
+
+    files = sorted(Path(args.tasks).glob("*.json"))
+    if not files:
+        raise CLIError(f"{args.tasks}: no task files (*.json) there")
+    planners = planner_names(args.planner)
+    perturbation = perturbation_of(args)
+    learned = load_nets(args.weights) if any(p in USES_NETS for p in planners) else None
+    config = search_config(args, progress=False)
+    scene = Scene()
+    report = {}
+    for planner in planners:
+        rows = []
+        for f in files:
+            task = load_task(f, scene)
+            live = not args.json and sys.stdout.isatty()
+            if live:
+                print(f"{task.name} ...", end="", flush=True)
+            o = solve(task, planner, scene, config, learned)
+            if perturbation is not None:
+                execute_perturbed(o, task, scene, perturbation, args.executions)
+            if args.out:
+                plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
+            rows.append(o.to_dict())
+            if not args.json:
+                back = "\r" if live else ""
+                print(f"{back}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
+                if o.reason:
+                    print(f"{'':32s} {o.reason}")
+                if o.perturbed:
+                    print(f"{'':32s} perturbed: {sum(o.perturbed)}/{len(o.perturbed)} executions succeed")
+        solved = sum(r["solved"] for r in rows)
+        report[planner] = {"solved": solved, "tasks": rows}
+        if perturbation is not None:
+            rates = [r["perturbed_success_rate"] for r in rows]
+            report[planner]["perturbed_success_rate"] = round(sum(rates) / len(rates), 4)
+            if not args.json:
+                print(
+                    f"{planner}: {sum(rates) / len(rates):.0%} of perturbed executions succeed, "
+                    "over the tasks"
+                )
+        expected = [r["success_rate"] for r in rows if "success_rate" in r]
+        if expected:
+            report[planner]["expected_solved"] = round(sum(expected), 3)
+        if not args.json:
+            fair = f" (over its equally short plans: {sum(expected):.2f} expected)" if expected else ""
+            print(f"{planner}: {solved}/{len(rows)} tasks solved{fair}")
+    if args.json:
+        print(json.dumps(report, indent=2))
+    scene.close()
+    return 0
+
+
+def cmd_bench_random(args) -> int:
+    """Random goals (random scenes, 1 to --max-steps random executions), every planner: success
+    rates with 95% intervals, the tasks planned over parallel workers."""
+    from tqdm import tqdm
+
+    from afford.planning.random_bench import BenchSpec, run, summarise
+    from afford.planning.run import USES_NETS
+
+    if args.n < 1:
+        raise CLIError("--n must be at least 1")
+    if args.workers < 1:
+        raise CLIError("--workers must be at least 1")
+    if args.time_limit is not None and args.time_limit <= 0:
+        raise CLIError("--time-limit must be positive (seconds)")
+    if not 1 <= args.min_steps <= args.max_steps:
+        raise CLIError("--min-steps must be at least 1 and at most --max-steps")
+    planners = planner_names(args.planner)
+    if any(p in USES_NETS for p in planners):
+        load_nets(args.weights)  # a missing weights folder is one line here, not a worker's traceback
+    threads = max(1, (os.cpu_count() or 1) // args.workers)
+    spec = BenchSpec(
+        args.max_steps,
+        planners,
+        args.weights,
+        args.time_limit,
+        threads,
+        args.min_steps,
+        search_config(args, progress=False),
+    )
+    rows = []
+    with tqdm(total=args.n, desc="bench random", unit="task", disable=args.json) as bar:
+        for row in run(spec, args.n, args.seed, args.workers):
+            rows.append(row)
+            bar.update(1)
+    summary = summarise(rows, planners)
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        record = {
+            "n": len(rows),
+            "first_seed": args.seed,
+            "min_steps": args.min_steps,
+            "max_steps": args.max_steps,
+            "search": args.search,
+            "summary": summary,
+        }
+        out.write_text(json.dumps(record | {"tasks": rows}, indent=2) + "\n")
+    if args.json:
+        print(
+            json.dumps({"n": len(rows), "first_seed": args.seed, "summary": summary, "tasks": rows}, indent=2)
+        )
+        return 0
+    for p in planners:
+        s = summary[p]
+        cut = f", {s['truncated']} cut by the time limit" if s["truncated"] else ""
+        ratio = f"; {s['of_oracle']:.2f} x oracle" if "of_oracle" in s else ""
+        print(
+            f"{p:9s} {s['success']:.2f} [{s['ci95'][0]:.2f}, {s['ci95'][1]:.2f}] success over {len(rows)} "
+            f"random tasks of {args.min_steps}-{args.max_steps} steps ({s['seconds']:.1f} s planning and "
+            f"{s['nodes']:.0f} states each{cut}){ratio}"
+        )
+    return 0
+
+
+def cmd_diagnose(args) -> int:
+    """Why the learned planner fails a task: the oracle's plan replayed through the nets."""
+    from tqdm import tqdm
+
+    from afford.planning.diagnose import diagnose
+    from afford.planning.tasks import load_task
+    from afford.sim.scene import Scene
+
+    files = []
+    for given in args.tasks:
+        path = Path(given)
+        found = sorted(path.glob("*.json")) if path.is_dir() else [path]
+        if not found:
+            raise CLIError(f"{given}: no task files (*.json) there")
+        files += found
+    learned = load_nets(args.weights)
+    scene = Scene()
+    out = []
+    for f in tqdm(files, desc="diagnose", unit="task", disable=args.json or len(files) == 1):
+        d = diagnose(load_task(f, scene), scene, learned)
+        out.append(d.to_dict())
+        if not args.json:
+            tqdm.write(d.describe())
+    if args.json:
+        print(json.dumps(out, indent=2))
+    scene.close()
+    return 0
+
+
+def add_parsers(sub) -> None:
+    from afford.planning.run import PLANNERS
+
+    pl = sub.add_parser(
+        "plan",
+        help="plan a task file, execute the plan, check the goal",
+        description="Plan a task (a JSON task file, see tasks/paper/) by tree search over affordances, "
+        "execute the plan in the simulator and check the task's success predicate. Planners: oracle (the "
+        "simulator as a perfect world model, paper II.D search), symbolic (canonical effects only, "
+        "breadth-first), learned (the paper's method: the same search with the trained recognition and "
+        "prediction nets), hybrid (paper V: the symbolic planner's canonical plans, each checked by the "
+        "learned nets against the goal; the search when all are rejected), hybrid-oracle (the same, "
+        "checked by the simulator), ensemble (paper V: the learned search on an ensemble of prediction "
+        "nets, each plan scored by its members' mean goal loss plus --risk standard deviations). Writes a "
+        "picture like the paper's Fig. 8 and a JSON record. Exit status 1 when the executed plan misses "
+        "the goal.",
+    )
+    pl.add_argument("--task", required=True, metavar="TASK.json")
+    pl.add_argument(
+        "--planner", choices=PLANNERS, default="oracle", help=f"one of {', '.join(PLANNERS)} (default oracle)"
+    )
+    pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
+    pl.add_argument("--json", action="store_true", help="print the record as JSON")
+    add_perturb_arguments(pl)
+    add_weights_argument(pl, detail=True)
+    add_search_arguments(pl)
+    pl.set_defaults(func=cmd_plan)
+
+    b = sub.add_parser("bench", help="benchmarks", description="Benchmarks over a set of tasks.")
+    bsub = b.add_subparsers(dest="bench", required=True)
+    bt = bsub.add_parser(
+        "tasks",
+        help="plan and execute every task of a folder, print a table",
+        description="Plan every task file in a folder with one planner, execute each plan, and print "
+        "solved / plan / plan length / nodes / planning seconds per task.",
+    )
+    bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
+    add_weights_argument(bt)
+    bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
+    bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
+    bt.add_argument("--json", action="store_true")
+    add_perturb_arguments(bt)
+    add_search_arguments(bt)
+    bt.set_defaults(func=cmd_bench_tasks)
+
+    br = bsub.add_parser(
+        "random",
+        help="random goals made by executing random affordances; success rates per planner",
+        description="Random tasks nobody tuned by hand: a random scene, 1 to --max-steps random affordance "
+        "executions, the goal a crop of the final image around what changed; success = every object within "
+        "3 cm of its goal position. Prints each planner's success rate with a Wilson 95% interval; the "
+        "symbolic planner scores the share of its equally short canonical plans that succeed.",
+    )
+    br.add_argument("--n", type=int, default=50, help="number of tasks (default 50)")
+    br.add_argument("--seed", type=int, default=0)
+    br.add_argument("--max-steps", type=int, default=4)
+    br.add_argument("--min-steps", type=int, default=1, help="fewest random executions a goal is made of")
+    br.add_argument("--planner", default="all", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
+    add_weights_argument(br)
+    br.add_argument(
+        "--workers",
+        type=int,
+        default=min(2, os.cpu_count() or 1),
+        help="parallel processes, one task each (default: 2, or 1 on a single core)",
+    )
+    br.add_argument(
+        "--time-limit",
+        type=float,
+        default=60.0,
+        metavar="SECONDS",
+        help="tree search per task and planner stops growing after this long and plans from what it has "
+        "(default 60; the oracle's trees at depth 3-4 can otherwise take minutes)",
+    )
+    br.add_argument("--out", metavar="FILE.json", help="also write the summary and every task's row here")
+    br.add_argument("--json", action="store_true")
+    add_search_arguments(br, max_nodes=False)
+    br.set_defaults(func=cmd_bench_random)
+
+    dg = sub.add_parser(
+        "diagnose",
+        help="why the learned planner fails a task (recognition, prediction, goal or execution)",
+        description="Plan each task with the learned planner and the oracle; where the learned plan fails, "
+        "replay the oracle's plan through the learned nets and name the cause: execution (a recognised "
+        "affordance was not there), recognition (the oracle's action is not among the edges recognised on "
+        "the predicted state), goal (the chosen plan truly matches the goal image as well, eq. 5) or "
+        "prediction (the net foresaw the oracle plan's effects wrongly). Oracle trees of 4 steps take "
+        "minutes.",
+    )
+    dg.add_argument("tasks", nargs="+", metavar="TASK.json|DIR", help="task files, or folders of them")
+    add_weights_argument(dg)
+    dg.add_argument("--json", action="store_true")
+    dg.set_defaults(func=cmd_diagnose)

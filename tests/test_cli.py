@@ -42,10 +42,11 @@ def test_demo_writes_strip(tmp_path):
 
 def test_ctrl_c_anywhere_ends_in_one_line_with_exit_130(monkeypatch, capsys):
     import afford.cli.main as cli
+    import afford.cli.scene as scene_commands
 
     def interrupted(args):
         raise KeyboardInterrupt  # as Ctrl-C would, in the middle of a command
 
-    monkeypatch.setattr(cli, "cmd_scene", interrupted)
+    monkeypatch.setattr(scene_commands, "cmd_scene", interrupted)
     assert cli.main(["scene", "--seed", "0"]) == 130
     assert capsys.readouterr().err == "afford: interrupted\n"

@@ -60,7 +60,12 @@ def test_train_resumes_and_evaluates(net, small_dataset, tmp_path, capsys):
             assert rows["all"]["all_area"]["n"] == transitions
             assert sum(r["all_area"]["n"] for k, r in rows.items() if k != "all") == transitions
             for row in rows.values():
-                assert all(0 <= row[m]["mean"] < 1 and row[m]["sd"] >= 0 for m in row)
+                # A split with no step of a kind (here: no side effect) has no figure for it.
+                assert all(row[m]["n"] == 0 or 0 <= row[m]["mean"] < 1 and row[m]["sd"] >= 0 for m in row)
+                canonical, side = row["changed_area_canonical"]["n"], row["changed_area_side"]["n"]
+                assert canonical + side == row["changed_area"]["n"]
+        foresight = result["foresight"]
+        assert foresight["acted"]["all"]["executions"] == transitions
         copy = result["test_copy"]["all"]
         # Copying errs only where the truth changed: the changed area's mean error is the larger.
         assert 0 < copy["all_area"]["mean"] < copy["changed_area_any"]["mean"]

@@ -13,6 +13,7 @@ from afford.prediction.ensemble import check_members, member_paths
 from afford.prediction.evaluate import load_net as load_prediction
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer, load_net, read_threshold
+from afford.training.checkpoint import BEST
 
 WEIGHTS = Path(__file__).resolve().parent / "weights"  # shipped with the package
 RECOGNITION_FILE = "recognition.safetensors"
@@ -27,7 +28,7 @@ def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
     """
     root = Path(weights) if weights else WEIGHTS
     flat = (root / RECOGNITION_FILE, root / PREDICTION_FILE)
-    runs = (root / "recognition" / "best.safetensors", root / "prediction" / "best.safetensors")
+    runs = (root / "recognition" / BEST, root / "prediction" / BEST)
     for rec, pred in (flat, runs):
         if rec.is_file() and pred.is_file():
             return rec, pred

@@ -7,27 +7,27 @@ from pathlib import Path
 
 from afford.cli.errors import CLIError
 from afford.cli.options import add_weights_argument, load_nets
+from afford.training.checkpoint import BEST
 
 
 def cmd_train(args) -> int:
     """Train the net named by `args.net` with its preset and overrides."""
     from afford.training.distributed import DistributedError, is_main_process, leave_world
-    from afford.training.overrides import OverrideError, apply_overrides
+    from afford.training.overrides import apply_overrides, preset_config
 
     if args.net == "recognition":
-        from afford.recognition.train import config_for, train
+        from afford.recognition.config import PRESETS
+        from afford.recognition.train import train
 
-        config = config_for(args.preset, steps=args.steps, threads=args.threads)
+        config = preset_config(PRESETS, args.preset, steps=args.steps, threads=args.threads)
     else:
-        from afford.prediction.train import config_for, train
+        from afford.prediction.config import PRESETS
+        from afford.prediction.train import train
 
-        config = config_for(
-            args.preset, steps=args.steps, threads=args.threads, pixel_input=not args.no_affordance_pixel
-        )
-    try:
-        config = apply_overrides(config, args.set)
-    except OverrideError as e:
-        raise CLIError(str(e)) from None
+        pixel = not args.no_affordance_pixel
+        steps, threads = args.steps, args.threads
+        config = preset_config(PRESETS, args.preset, steps=steps, threads=threads, pixel_input=pixel)
+    config = apply_overrides(config, args.set)  # a bad --set is a UserError: one line
     try:
         extra = {"predicted": args.predicted} if args.net == "recognition" else {}
         state = train(
@@ -285,9 +285,7 @@ def add_parsers(sub) -> None:
     f.set_defaults(func=cmd_eval)
     for q in (r, p):
         q.add_argument("--data", required=True, metavar="DIR")
-        q.add_argument(
-            "--checkpoint", default="best.safetensors", help="file in RUN (default best.safetensors)"
-        )
+        q.add_argument("--checkpoint", default=BEST, help=f"file in RUN (default {BEST})")
         q.add_argument("--json", action="store_true")
         q.set_defaults(func=cmd_eval)
 
@@ -308,6 +306,6 @@ def add_parsers(sub) -> None:
         help="a prediction run to ship as a member of the ensemble planner's ensemble (beside --prediction); "
         "repeat for more",
     )
-    x.add_argument("--checkpoint", default="best.safetensors")
+    x.add_argument("--checkpoint", default=BEST, help=f"file in each RUN (default {BEST})")
     x.add_argument("--out", required=True, metavar="DIR")
     x.set_defaults(func=cmd_export)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +13,7 @@ from afford.data.augment import AugmentConfig
 from afford.data.effects import summary_effects
 from afford.data.format import Dataset, shard_path, shard_summary
 from afford.data.torch_data import PredictionData, collate_prediction, worker_init
-from afford.prediction.config import PRESETS, PredictionConfig
+from afford.prediction.config import PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
 from afford.sim.affordances import TYPES
@@ -235,7 +234,3 @@ def train(
         world=world,
     )
     return run(loop, run_dir, progress)
-
-
-def config_for(preset: str, **overrides) -> PredictionConfig:
-    return replace(PRESETS[preset], **{k: v for k, v in overrides.items() if v is not None})

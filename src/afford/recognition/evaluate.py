@@ -12,6 +12,7 @@ from afford.recognition.infer import THRESHOLD_FILE, Recognizer
 from afford.recognition.metrics import Tally
 from afford.recognition.targets import Detection
 from afford.sim.affordances import TYPES
+from afford.training.checkpoint import BEST
 
 THRESHOLDS = tuple(np.round(np.arange(0.30, 0.96, 0.05), 2))
 TRAIN_EXAMPLES = 100  # the paper's Table 1 also reports 100 training examples
@@ -72,9 +73,7 @@ def operating_point(rows: list[dict]) -> float:
     return best["threshold"]
 
 
-def evaluate(
-    run: str | Path, data_dir: str | Path, pictures: int = 6, checkpoint: str = "best.safetensors"
-) -> dict:
+def evaluate(run: str | Path, data_dir: str | Path, pictures: int = 6, checkpoint: str = BEST) -> dict:
     """Tune a training run's cut-off on val (saved in the run), then Table 1."""
     run = Path(run)
     recognizer = Recognizer.from_run(run, checkpoint)

@@ -12,7 +12,7 @@ import torch
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import RecognitionNet, fused_for_inference
 from afford.recognition.targets import Detection, decode, suppress
-from afford.training.checkpoint import load_net_from_checkpoint
+from afford.training.checkpoint import LAST, load_net_from_checkpoint
 
 KIND = "recognition"
 THRESHOLD_FILE = "threshold.json"  # written by `afford eval recognition` (tuned on val)
@@ -37,7 +37,7 @@ class Recognizer:
         self.threshold = config.confidence if threshold is None else threshold
 
     @classmethod
-    def from_run(cls, run: str | Path, checkpoint: str = "last.safetensors") -> Recognizer:
+    def from_run(cls, run: str | Path, checkpoint: str = LAST) -> Recognizer:
         run = Path(run)
         net, config, _ = load_net(run / checkpoint)
         return cls(net, config, read_threshold(run))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -104,9 +103,3 @@ def train(
         world=world,
     )
     return run(loop, run_dir, progress)
-
-
-def config_for(preset: str, **overrides) -> RecognitionConfig:
-    from afford.recognition.config import PRESETS
-
-    return replace(PRESETS[preset], **{k: v for k, v in overrides.items() if v is not None})

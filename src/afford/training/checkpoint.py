@@ -21,6 +21,8 @@ from torch import nn
 from afford.errors import UserError
 
 FORMAT_VERSION = 1
+# A training run's folder keeps its latest checkpoint and its best by validation loss.
+LAST, BEST = "last.safetensors", "best.safetensors"
 
 
 class CheckpointError(UserError):

@@ -21,6 +21,8 @@ import torch
 from torch import nn
 
 from afford.training.checkpoint import (
+    BEST,
+    LAST,
     load_model_state,
     load_optimizer_state,
     read_checkpoint,
@@ -28,8 +30,6 @@ from afford.training.checkpoint import (
 )
 from afford.training.distributed import World, mean_over_ranks
 from afford.training.log import NullLog, RunLog
-
-LAST, BEST = "last.safetensors", "best.safetensors"
 
 
 @dataclass
@@ -75,45 +75,66 @@ def _forever(batches: Iterable) -> Iterator:
         yield from batches
 
 
-def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
-    from tqdm import tqdm
+class _Run:
+    """One call of `run`: the loop, its folder, its state and log, and the steps it takes."""
 
-    run_dir = Path(run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
-    config_dict = asdict(loop.config)
-    state = LoopState()
-    main = loop.world.main  # the one rank that writes
-    log = RunLog(run_dir) if main else NullLog()
-    if (run_dir / LAST).is_file():
-        tensors, meta = read_checkpoint(run_dir / LAST, loop.kind)
-        load_model_state(loop.model, tensors, run_dir / LAST)
-        load_optimizer_state(loop.optimizer, tensors, meta)
-        state = LoopState(**meta["extra"]["loop"])
-        log.truncate_after(state.step)
-    elif loop.init is not None:
-        load_model_state(loop.model, read_checkpoint(loop.init, loop.kind)[0], loop.init)
-    if main:
-        (run_dir / "config.json").write_text(json.dumps({"kind": loop.kind, **config_dict}, indent=2) + "\n")
+    def __init__(self, loop: Loop, run_dir: Path):
+        self.loop, self.dir = loop, run_dir
+        self.main = loop.world.main  # the one rank that writes
+        self.log = RunLog(run_dir) if self.main else NullLog()
+        self.config = asdict(loop.config)
+        self.state = LoopState()
+        self.running: dict[str, float] = {}
 
-    def save(path: str) -> None:
-        if not main:
-            return
-        save_checkpoint(
-            run_dir / path,
-            loop.model,
-            loop.kind,
-            config_dict,
-            state.step,
-            loop.optimizer,
-            {"loop": asdict(state)},
-        )
+    def start(self) -> None:
+        """Resume from RUN/last.safetensors, or start from `loop.init`'s weights, or afresh."""
+        loop, last = self.loop, self.dir / LAST
+        if last.is_file():
+            tensors, meta = read_checkpoint(last, loop.kind)
+            load_model_state(loop.model, tensors, last)
+            load_optimizer_state(loop.optimizer, tensors, meta)
+            self.state = LoopState(**meta["extra"]["loop"])
+            self.log.truncate_after(self.state.step)
+        elif loop.init is not None:
+            load_model_state(loop.model, read_checkpoint(loop.init, loop.kind)[0], loop.init)
+        if self.main:
+            record = {"kind": loop.kind, **self.config}
+            (self.dir / "config.json").write_text(json.dumps(record, indent=2) + "\n")
 
-    def set_lr() -> None:
+    def save(self, name: str) -> None:
+        if self.main:
+            loop, state = self.loop, self.state
+            extra = {"loop": asdict(state)}
+            save_checkpoint(
+                self.dir / name, loop.model, loop.kind, self.config, state.step, loop.optimizer, extra
+            )
+
+    def step(self, batch) -> float:
+        """One optimiser step at the scheduled rate; the batch's loss."""
+        loop, state = self.loop, self.state
         scale = state.lr_scale * (loop.lr_at(state.step) if loop.lr_at else 1.0)
         for g in loop.optimizer.param_groups:
             g["lr"] = loop.config.lr * scale
+        loss, parts = loop.train_step(batch)
+        loop.optimizer.zero_grad(set_to_none=True)
+        loss.backward()
+        loop.optimizer.step()
+        state.step += 1
+        for k, v in {"loss": float(loss.detach()), **parts}.items():
+            self.running[k] = self.running.get(k, 0.0) + v
+        return float(loss.detach())
 
-    def evaluate() -> None:
+    def log_running(self) -> float:
+        """Log the mean of the last `log_every` steps (over every rank); the mean loss."""
+        n = self.loop.config.log_every
+        means = mean_over_ranks({k: v / n for k, v in self.running.items()}, self.loop.world)
+        self.log.add(self.state.step, {f"train/{k}": v for k, v in means.items()} | {"lr": _lr(self.loop)})
+        self.running = {}
+        return means["loss"]
+
+    def evaluate(self) -> None:
+        """Validate, keep the best weights, halve the rate on a plateau (the paper's schedule)."""
+        loop, state = self.loop, self.state
         loop.model.eval()
         with torch.no_grad():
             values = loop.validate()
@@ -124,57 +145,50 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
         else:
             state.evals_without_improvement += 1
             if loop.patience and state.evals_without_improvement >= loop.patience:
-                state.lr_scale /= 2  # the paper's schedule for the prediction nets
+                state.lr_scale /= 2
                 state.evals_without_improvement = 0
-        log.add(state.step, {f"val/{k}": v for k, v in values.items()})
-        save(LAST)
+        self.log.add(state.step, {f"val/{k}": v for k, v in values.items()})
+        self.save(LAST)
         if improved:
-            save(BEST)
-        log.plot(f"{loop.kind}: {run_dir.name}")
+            self.save(BEST)
+        self.log.plot(f"{loop.kind}: {self.dir.name}")
 
+
+def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
+    """Train to `loop.config.steps`, resuming where RUN/last.safetensors left off."""
+    from tqdm import tqdm
+
+    run_dir = Path(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    this = _Run(loop, run_dir)
+    this.start()
+    state, config = this.state, loop.config
     # `kill` (SIGTERM) stops like Ctrl-C, saving a checkpoint first; a background job started
     # from a script ignores SIGINT, so this is how such a run is stopped cleanly.
     previous = signal.signal(signal.SIGTERM, _interrupt)
-    bar = tqdm(
-        total=loop.config.steps,
-        initial=state.step,
-        disable=not (progress and main),
-        desc=f"train {loop.kind}",
-        unit="step",
-    )
+    quiet = not (progress and this.main)
+    bar = tqdm(total=config.steps, initial=state.step, disable=quiet, desc=f"train {loop.kind}", unit="step")
     loop.model.train()
     batches = _forever(loop.batches)
-    t0, running = time.perf_counter(), {}
+    t0 = time.perf_counter()
     try:
-        while state.step < loop.config.steps:
-            batch = next(batches)
-            set_lr()
-            loss, parts = loop.train_step(batch)
-            loop.optimizer.zero_grad(set_to_none=True)
-            loss.backward()
-            loop.optimizer.step()
-            state.step += 1
-            for k, v in {"loss": float(loss.detach()), **parts}.items():
-                running[k] = running.get(k, 0.0) + v
-            if state.step % loop.config.log_every == 0:
-                n = loop.config.log_every
-                means = mean_over_ranks({k: v / n for k, v in running.items()}, loop.world)
-                log.add(state.step, {f"train/{k}": v for k, v in means.items()} | {"lr": _lr(loop)})
-                bar.set_postfix(loss=f"{means['loss']:.4f}")
-                running = {}
+        while state.step < config.steps:
+            this.step(next(batches))
+            if state.step % config.log_every == 0:
+                bar.set_postfix(loss=f"{this.log_running():.4f}")
             bar.update(1)
-            if state.step % loop.config.eval_every == 0 or state.step == loop.config.steps:
+            if state.step % config.eval_every == 0 or state.step == config.steps:
                 state.seconds += time.perf_counter() - t0
                 t0 = time.perf_counter()
-                evaluate()
+                this.evaluate()
     except KeyboardInterrupt:
         state.seconds += time.perf_counter() - t0
-        save(LAST)
+        this.save(LAST)
         raise
     finally:
         signal.signal(signal.SIGTERM, previous)
         bar.close()
-        log.close()
+        this.log.close()
     return state
 
 

@@ -45,3 +45,8 @@ def apply_overrides(config, pairs: list[str] | None):
         except ValueError as e:
             raise OverrideError(f"--set {pair!r}: {e}") from None
     return dataclasses.replace(config, **changes)
+
+
+def preset_config(presets: dict, preset: str, **given):
+    """A preset's config with the options the command line gave (None: not given) set."""
+    return dataclasses.replace(presets[preset], **{k: v for k, v in given.items() if v is not None})

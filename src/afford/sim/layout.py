@@ -8,7 +8,7 @@ sitting on the block, and objects standing right beside it (in the path of a tur
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -67,27 +67,45 @@ class _Table:
         self.circles.extend(circles)
 
 
-def random_layout(rng: np.random.Generator, config: LayoutConfig = LayoutConfig()) -> list[ObjectSpec]:
-    """A random arrangement: 0-3 cups, 0-3 balls, 0-2 supports and the block."""
+@dataclass
+class _Build:
+    """A layout being built: the draws, the table's occupied circles, the objects so far."""
+
+    rng: np.random.Generator
+    config: LayoutConfig
+    table: _Table
+    specs: list[ObjectSpec] = field(default_factory=list)
+    place_points: list[np.ndarray] = field(default_factory=list)  # free tops an object can start on
+    block_frame: tuple | None = None  # (centre xy, long axis xy, centre z, mode) of the placed block
+
+    def uniform_xy(self, margin: float = 0.0) -> tuple[float, float]:
+        return (
+            float(self.rng.uniform(WORK_AREA.x[0] + margin, WORK_AREA.x[1] - margin)),
+            float(self.rng.uniform(WORK_AREA.y[0] + margin, WORK_AREA.y[1] - margin)),
+        )
+
+
+def random_layout(rng: np.random.Generator, config: LayoutConfig | None = None) -> list[ObjectSpec]:
+    """A random arrangement: 0-3 cups, 0-3 balls, 0-2 supports and the block. Three phases:
+    the block with the supports its mode needs, the other supports, then cups and balls."""
+    config = LayoutConfig() if config is None else config
     n_cups = int(rng.integers(0, LIMITS.cups + 1))
     n_balls = int(rng.integers(0, LIMITS.balls + 1))
     mode = str(rng.choice(config.block_modes, p=config.block_mode_p))
     n_supports = int(rng.integers(0, LIMITS.supports + 1))
     n_supports = max(n_supports, {"table": 0, "one_support": 1, "two_supports": 2, "propped": 1}[mode])
-    table = _Table(config.gap)
-    specs: list[ObjectSpec] = []
-    place_points: list[np.ndarray] = []  # free tops an object can start on
-    block_frame = None
+    build = _Build(rng, config, _Table(config.gap))
+    _place_block(build, mode)
+    _place_supports(build, n_supports - sum(1 for s in build.specs if s.kind == "support"))
+    _place_small(build, ["cup"] * n_cups + ["ball"] * n_balls)
+    return build.specs
 
-    def uniform_xy(margin: float = 0.0) -> tuple[float, float]:
-        return (
-            float(rng.uniform(WORK_AREA.x[0] + margin, WORK_AREA.x[1] - margin)),
-            float(rng.uniform(WORK_AREA.y[0] + margin, WORK_AREA.y[1] - margin)),
-        )
 
-    # The block, with the supports its mode needs.
-    for _ in range(config.tries):
-        x, y = uniform_xy(0.03)
+def _place_block(build: _Build, mode: str) -> None:
+    """The block, with the supports its mode needs (none when no spot is free)."""
+    rng = build.rng
+    for _ in range(build.config.tries):
+        x, y = build.uniform_xy(0.03)
         yaw = float(rng.uniform(-np.pi / 2, np.pi / 2))
         u = np.array([np.cos(yaw), np.sin(yaw)])
         supports, z, pitch = [], BLOCK.half[2], 0.0
@@ -105,61 +123,59 @@ def random_layout(rng: np.random.Generator, config: LayoutConfig = LayoutConfig(
             pitch = -side * np.arctan2(SUPPORT_TOP, 2 * (BLOCK.half[0] - 0.02))
             z = SUPPORT_TOP / 2 + BLOCK.half[2] + 0.004
         circles = _block_circles(x, y, yaw) + [(sx, sy, FOOTPRINT["support"]) for sx, sy in supports]
-        if table.free(circles):
-            table.add(circles)
+        if build.table.free(circles):
+            build.table.add(circles)
             for sx, sy in supports:
-                specs.append(ObjectSpec.upright("support", sx, sy, np.degrees(yaw)))
-            specs.append(ObjectSpec("block", (x, y, z), _yaw_quat(yaw, pitch)))
-            block_frame = (np.array([x, y]), u, z, mode)
-            break
+                build.specs.append(ObjectSpec.upright("support", sx, sy, np.degrees(yaw)))
+            build.specs.append(ObjectSpec("block", (x, y, z), _yaw_quat(yaw, pitch)))
+            build.block_frame = (np.array([x, y]), u, z, mode)
+            return
 
-    # The remaining supports, free on the table; their tops are place points.
-    for _ in range(n_supports - sum(1 for s in specs if s.kind == "support")):
-        for _ in range(config.tries):
-            x, y = uniform_xy()
+
+def _place_supports(build: _Build, n: int) -> None:
+    """The remaining supports, free on the table; their tops are place points."""
+    for _ in range(n):
+        for _ in range(build.config.tries):
+            x, y = build.uniform_xy()
             c = [(x, y, FOOTPRINT["support"])]
-            if table.free(c):
-                table.add(c)
-                specs.append(ObjectSpec.upright("support", x, y, float(rng.uniform(0, 90))))
-                place_points.append(np.array([x, y, SUPPORT_TOP]))
+            if build.table.free(c):
+                build.table.add(c)
+                build.specs.append(ObjectSpec.upright("support", x, y, float(build.rng.uniform(0, 90))))
+                build.place_points.append(np.array([x, y, SUPPORT_TOP]))
                 break
 
+
+def _place_small(build: _Build, kinds: list[str]) -> None:
+    """Cups and balls: on the block, on a support, beside the block, or anywhere."""
+    rng, config, frame = build.rng, build.config, build.block_frame
     block_points = []
-    if block_frame is not None and block_frame[3] != "propped":
-        centre, u, z, _ = block_frame
+    if frame is not None and frame[3] != "propped":
+        centre, u, z, _ = frame
         top = z + BLOCK.half[2]
         block_points = [np.array([*(centre + u * dx), top]) for dx in BLOCK.place_offsets]
-
-    # Cups and balls: on the block, on a support, beside the block, or anywhere.
-    for kind in ["cup"] * n_cups + ["ball"] * n_balls:
+    for kind in kinds:
         r = FOOTPRINT[kind]
         spot = None
         roll = rng.random()
         if roll < config.p_on_block and block_points:
             spot = block_points.pop(int(rng.integers(len(block_points))))
-        elif roll < config.p_on_block + config.p_on_support and place_points:
-            spot = place_points.pop(int(rng.integers(len(place_points))))
+        elif roll < config.p_on_block + config.p_on_support and build.place_points:
+            spot = build.place_points.pop(int(rng.integers(len(build.place_points))))
         if spot is not None:
-            specs.append(
-                ObjectSpec(
-                    kind,
-                    (float(spot[0]), float(spot[1]), float(spot[2] + REST_HALF_HEIGHT[kind])),
-                    _yaw_quat(float(rng.uniform(0, 2 * np.pi))),
-                )
-            )
+            pos = (float(spot[0]), float(spot[1]), float(spot[2] + REST_HALF_HEIGHT[kind]))
+            build.specs.append(ObjectSpec(kind, pos, _yaw_quat(float(rng.uniform(0, 2 * np.pi)))))
             continue
         for attempt in range(config.tries):
-            if block_frame is not None and attempt == 0 and rng.random() < config.p_beside_block:
-                centre, u, _, _ = block_frame
+            if frame is not None and attempt == 0 and rng.random() < config.p_beside_block:
+                centre, u, _, _ = frame
                 n = np.array([-u[1], u[0]]) * rng.choice([-1.0, 1.0])
                 along = rng.uniform(-BLOCK.half[0], BLOCK.half[0])
                 dist = BLOCK.half[1] + r + rng.uniform(config.gap, 0.03)
                 x, y = centre + u * along + n * dist
             else:
-                x, y = uniform_xy()
+                x, y = build.uniform_xy()
             c = [(float(x), float(y), r)]
-            if table.free(c):
-                table.add(c)
-                specs.append(ObjectSpec.upright(kind, float(x), float(y)))
+            if build.table.free(c):
+                build.table.add(c)
+                build.specs.append(ObjectSpec.upright(kind, float(x), float(y)))
                 break
-    return specs

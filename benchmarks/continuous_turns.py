@@ -115,8 +115,8 @@ def _sweep(model, scene, task, plan):
     import numpy as np
     import torch
 
-    from afford.data.format import Col, encode_affordance
     from afford.planning.oracle import execute_plan
+    from afford.sim.affordance import Col, encode_affordance
 
     turns = [i for i, a in enumerate(plan) if a.turn]
     image = torch.from_numpy(np.ascontiguousarray(model.image.transpose(2, 0, 1)))[None]

@@ -9,13 +9,13 @@ import pytest
 import torch
 from PIL import Image
 
-from afford.data.format import decode_affordance, encode_affordance
 from afford.planning.symbolic import CanonicalWorld
 from afford.prediction.config import PRESETS as PRED
 from afford.prediction.model import PredictionNet
 from afford.recognition.config import PRESETS as REC
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, loss
+from afford.sim.affordance import decode_affordance, encode_affordance
 from afford.sim.affordance_types import REGISTRY, AffordanceType, type_index
 from afford.sim.affordances import Affordance, parametrise
 from afford.sim.scene import ObjectSpec

@@ -3,9 +3,9 @@
 import numpy as np
 import torch
 
-from afford.data.format import Col
 from afford.planning.angles import optimise_turns
 from afford.planning.goal import Goal
+from afford.sim.affordance import Col
 from afford.sim.affordances import Affordance
 
 SIZE, RADIUS = 32, 10.0

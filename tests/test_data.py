@@ -267,8 +267,9 @@ def test_generate_heals_corrupt_shards_and_info_names_them(small, tmp_path, caps
 
 
 def test_continuous_turn_angles_draw_any_angle_and_resume_only_as_made(tmp_path):
-    from afford.data.format import Col, DataError, Dataset
+    from afford.data.format import DataError, Dataset
     from afford.data.generate import GenerateConfig, generate
+    from afford.sim.affordance import Col
 
     config = GenerateConfig(sequences=8, seed=6, workers=1, shard_size=4, turn_angles="continuous")
     generate(tmp_path / "c", config, progress=False)

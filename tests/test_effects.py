@@ -6,8 +6,8 @@ from scenarios import BLOCK_TOP_ON_TABLE, block_on_support, find
 from test_physics import BESIDE
 
 from afford.data import effects as fx
-from afford.data.format import encode_affordance
 from afford.data.shard import pose_array
+from afford.sim.affordance import encode_affordance
 from afford.sim.constants import BALL
 from afford.sim.scene import ObjectSpec as O
 

@@ -6,7 +6,7 @@ import pytest
 from afford.planning.goal import Goal
 from afford.planning.strategies import search
 from afford.planning.tree import SearchConfig
-from afford.sim.affordances import Affordance
+from afford.sim.affordance import Affordance, Detection
 
 CELLS = 24
 GOAL_CELL = 12  # six steps of +2 from cell 0
@@ -28,7 +28,7 @@ class StepWorld:
     def recognise(self, nodes):
         return [
             [
-                (Affordance("grasp", (float(q), 0.0, 0.0), 0.0, False), 1.0)
+                Detection(Affordance("grasp", (float(q), 0.0, 0.0), 0.0, False))
                 for q in range(n.state - 2, n.state + 3)
             ]
             for n in nodes

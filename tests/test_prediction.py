@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 import torch
 
-from afford.data.format import encode_affordance
 from afford.prediction.config import PRESETS
 from afford.prediction.model import (
     PredictionNet,
@@ -17,6 +16,7 @@ from afford.prediction.model import (
 )
 from afford.prediction.train import change_mask, sequence_loss
 from afford.sim import camera
+from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 from afford.training.signsgd import SignSGD
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 import torch
 
-from afford.data.format import encode_affordance
 from afford.recognition.config import PRESETS
 from afford.recognition.metrics import Tally, matches
 from afford.recognition.model import REG, RecognitionNet, fused_for_inference
-from afford.recognition.targets import Detection, build_targets, decode, loss, quality, suppress
+from afford.recognition.targets import build_targets, decode, loss, quality, suppress
 from afford.sim import camera
+from afford.sim.affordance import Detection, encode_affordance
 from afford.sim.affordances import Affordance
 from afford.training.checkpoint import CheckpointError, save_checkpoint
 

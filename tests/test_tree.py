@@ -6,7 +6,7 @@ import pytest
 from afford.planning.goal import Goal
 from afford.planning.strategies import search
 from afford.planning.tree import SearchConfig, edges
-from afford.sim.affordances import Affordance
+from afford.sim.affordance import Affordance, Detection
 
 CELLS = 8
 QUIET = SearchConfig(progress=False)
@@ -39,8 +39,8 @@ class LineWorld:
             for q in (p - 2, p + 2):
                 if 0 <= q < CELLS:
                     for angle, conf in ((0.0, 0.6), (90.0, 0.9)):
-                        affs.append((Affordance("grasp", (float(q), 0.0, 0.0), angle, True), conf))
-            affs.append((Affordance("turn", (float(p), 0.0, 0.0), 0.0, False), 1.0))
+                        affs.append(Detection(Affordance("grasp", (float(q), 0.0, 0.0), angle, True), conf))
+            affs.append(Detection(Affordance("turn", (float(p), 0.0, 0.0), 0.0, False)))
             out.append(affs)
         return out
 

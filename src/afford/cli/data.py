@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from afford.cli.errors import CLIError
-from afford.data.format import Col
+from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
 
 

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from afford.data.format import Col as C
 from afford.sim import camera
+from afford.sim.affordance import Col as C
 from afford.sim.constants import CAMERA
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from afford.data.format import Col
+from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
 from afford.sim.camera import SIZE, world_to_pixel
 from afford.sim.constants import BALL, BLOCK, CUP, EFFECTS, SUPPORT

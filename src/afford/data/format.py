@@ -27,8 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from afford.errors import UserError
-from afford.sim.affordance_types import type_index, type_name
-from afford.sim.affordances import Affordance
+from afford.sim.affordance import AFF_WIDTH, Affordance, decode_affordance
 
 FORMAT = "afford-sequences"
 FORMAT_VERSION = 1
@@ -38,42 +37,12 @@ DEPTH_SCALE = 65535
 # The authors' release: 26,563 sequences of which 500 validation and 500 test.
 PAPER_SEQUENCES = 26_563
 PAPER_HELD_OUT = 500
-# An affordance row: type index, x, y, z, angle (degrees), symmetric (0/1), turn (+-90 or 0).
-AFF_COLUMNS = ("type", "x", "y", "z", "angle", "symmetric", "turn")
-AFF_WIDTH = len(AFF_COLUMNS)
-
-
-class Col:
-    """Where each of AFF_COLUMNS sits in a row: code reads rows by these names, not numbers."""
-
-    TYPE, X, Y, Z, ANGLE, SYMMETRIC, TURN = range(AFF_WIDTH)
-    POSITION = slice(X, Z + 1)  # x, y, z
-    XY = slice(X, Y + 1)
-
-
 POSE_COLUMNS = ("x", "y", "z", "qw", "qx", "qy", "qz")
 SPLITS = ("train", "val", "test")
 
 
 class DataError(UserError):
     """A dataset that cannot be read: missing, corrupt, or of another format version."""
-
-
-def encode_affordance(a: Affordance) -> np.ndarray:
-    row = np.zeros(AFF_WIDTH, dtype=np.float32)
-    row[Col.TYPE], row[Col.POSITION], row[Col.ANGLE] = type_index(a.type), a.position, a.angle
-    row[Col.SYMMETRIC], row[Col.TURN] = float(a.symmetric), a.turn
-    return row
-
-
-def decode_affordance(row: np.ndarray) -> Affordance:
-    return Affordance(
-        type_name(int(row[Col.TYPE])),
-        tuple(float(v) for v in row[Col.POSITION]),
-        float(row[Col.ANGLE]),
-        bool(row[Col.SYMMETRIC] > 0.5),
-        float(row[Col.TURN]),
-    )
 
 
 @dataclass

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from afford.data.format import AFF_WIDTH, Sequence, encode_affordance, quantise, shard_path, write_shard
+from afford.data.format import Sequence, quantise, shard_path, write_shard
+from afford.sim.affordance import AFF_WIDTH, encode_affordance
 from afford.sim.affordances import parametrise
 from afford.sim.layout import LayoutConfig, random_layout
 from afford.sim.scene import Scene

@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from afford.data.format import Col, encode_affordance
 from afford.planning.goal import Goal
 from afford.planning.tree import Node, SearchResult
+from afford.sim.affordance import Col, encode_affordance
 from afford.sim.affordances import Affordance
 
 RESTART_ANGLES = (-135.0, -45.0, 45.0, 135.0)  # starting points, one per quadrant

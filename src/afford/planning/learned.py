@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from afford.data.format import encode_affordance
 from afford.planning.tree import Node, Recognised
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
+from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 
 
@@ -86,9 +86,8 @@ class LearnedModel:
 
 
 def recognise_nodes(recognizer: Recognizer, nodes: list[Node]) -> list[Recognised]:
-    """The recognizer on each node's image: its affordances with their confidences."""
-    detections = recognizer(np.stack([n.image for n in nodes]))
-    return [[(d.affordance, d.score) for d in dets] for dets in detections]
+    """The recognizer on each node's image: its detections (affordances with confidences)."""
+    return recognizer(np.stack([n.image for n in nodes]))
 
 
 def to_chw(images: np.ndarray) -> torch.Tensor:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from afford.planning.tree import Node, Recognised
+from afford.sim.affordance import Detection
 from afford.sim.affordances import Affordance
 from afford.sim.perturb import Perturbation, reset_perturbed
 from afford.sim.scene import ObjectSpec, Scene
@@ -32,7 +33,7 @@ class OracleModel:
         out = []
         for n in nodes:
             self.scene.restore(n.state)
-            out.append([(a, 1.0) for a in self.scene.affordances()])
+            out.append([Detection(a) for a in self.scene.affordances()])
         return out
 
     def predict(self, parents: list[Node], actions: list[Affordance]):

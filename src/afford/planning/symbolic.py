@@ -25,6 +25,7 @@ import numpy as np
 
 from afford.planning.predicates import Predicate
 from afford.planning.tree import edges
+from afford.sim.affordance import Detection
 from afford.sim.affordance_types import REGISTRY
 from afford.sim.affordances import Affordance
 from afford.sim.camera import world_to_pixel
@@ -253,7 +254,7 @@ def plan_symbolic(
         nxt: dict[tuple, _Entry] = {}
         for key, entry in levels[depth].items():
             world.realise(entry.state)
-            actions = edges([(a, 1.0) for a in scan_order(scene.affordances())], TOLERANCES.merge_radius)
+            actions = edges([Detection(a) for a in scan_order(scene.affordances())], TOLERANCES.merge_radius)
             expanded += 1
             for aff in actions:
                 child = world.apply(entry.state, aff)

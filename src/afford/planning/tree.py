@@ -26,7 +26,8 @@ from tqdm import tqdm
 
 from afford.errors import UserError
 from afford.planning.goal import Goal
-from afford.sim.affordances import Affordance, parametrise
+from afford.sim.affordance import Affordance, Detection
+from afford.sim.affordances import parametrise
 from afford.sim.constants import TOLERANCES
 
 
@@ -52,7 +53,7 @@ class Node:
         return len(self.plan)
 
 
-Recognised = list[tuple[Affordance, float]]  # affordances with their confidence
+Recognised = list[Detection]  # the affordances on one state, each with its confidence
 
 
 class WorldModel(Protocol):
@@ -148,18 +149,26 @@ class SearchResult:
 
 def edges(recognised: Recognised, merge_radius: float) -> list[Affordance]:
     """The edges out of a node: one of each group of symmetric duplicates (the most
-    confident), then execution parameters filled in (paper II.D)."""
-    kept: list[tuple[Affordance, float]] = []
-    for aff, conf in sorted(recognised, key=lambda ac: -ac[1]):
-        if aff.symmetric and any(
-            k.symmetric
-            and k.type == aff.type
-            and np.linalg.norm(np.subtract(k.position, aff.position)) <= merge_radius
-            for k, _ in kept
+    confident), then execution parameters filled in (paper II.D).
+
+    Recognition's own suppression (`recognition/targets.suppress`) already drops a detection
+    near a more confident one of the same type within its 2.5 cm and 10 degrees; this merge is
+    the planner's, and also applies to world models that do not go through the recognition net
+    (the oracle's and the symbolic planner's ground truth lists a symmetric object at every
+    quarter turn): symmetric affordances of one type within `merge_radius` are one action.
+    """
+    kept: list[Detection] = []
+    for d in sorted(recognised, key=lambda d: -d.score):
+        a = d.affordance
+        if a.symmetric and any(
+            k.affordance.symmetric
+            and k.affordance.type == a.type
+            and np.linalg.norm(np.subtract(k.affordance.position, a.position)) <= merge_radius
+            for k in kept
         ):
             continue
-        kept.append((aff, conf))
-    return parametrise([a for a, _ in kept])
+        kept.append(d)
+    return parametrise([d.affordance for d in kept])
 
 
 class Growth:

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from afford.data.format import encode_affordance
 from afford.errors import UserError
 from afford.planning.goal import Goal
 from afford.planning.learned import recognise_nodes, to_chw
@@ -25,6 +24,7 @@ from afford.planning.tree import Node, Recognised
 from afford.prediction.ensemble import spread
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
+from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 
 

@@ -21,7 +21,8 @@ import torch
 
 from afford.data import effects as fx
 from afford.data.effects import effect_mask, object_mask
-from afford.data.format import Col, Dataset
+from afford.data.format import Dataset
+from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
 
 BATCH = 32

@@ -20,10 +20,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from afford.data.format import Dataset, decode_affordance
+from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
 from afford.recognition.infer import Recognizer
 from afford.recognition.metrics import Tally
+from afford.sim.affordance import decode_affordance
 
 STEPS = 4
 BATCH = 32

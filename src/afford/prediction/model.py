@@ -18,11 +18,11 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from afford.data.format import Col
 from afford.prediction.config import PredictionConfig
 from afford.prediction.dense import DenseDecoder, DenseEncoder, DenseP
 from afford.prediction.layers import apply_difference, clamped_tanh, normalise_latent
 from afford.prediction.spatial import SpatialDecoder, SpatialEncoder, SpatialP
+from afford.sim.affordance import Col
 from afford.sim.camera import world_to_pixel
 
 __all__ = ["PredictionNet", "affordance_pixel", "apply_difference", "clamped_tanh", "normalise_latent"]

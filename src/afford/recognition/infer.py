@@ -11,7 +11,8 @@ import torch
 
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import RecognitionNet, fused_for_inference
-from afford.recognition.targets import Detection, decode, suppress
+from afford.recognition.targets import decode, suppress
+from afford.sim.affordance import Detection
 from afford.training.checkpoint import LAST, load_net_from_checkpoint
 
 KIND = "recognition"

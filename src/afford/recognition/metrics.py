@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from afford.recognition.targets import Detection, wrap180
+from afford.recognition.targets import wrap180
+from afford.sim.affordance import Detection
 from afford.sim.affordances import TYPES, Affordance
 
 MATCH_RADIUS = 0.025  # metres

@@ -19,11 +19,10 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from afford.data.format import AFF_WIDTH, Col
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import REG
 from afford.sim import camera
-from afford.sim.affordances import Affordance
+from afford.sim.affordance import AFF_WIDTH, Affordance, Col, Detection
 from afford.sim.constants import CAMERA
 
 ANCHOR_HALF_WIDTH = 45.0
@@ -165,12 +164,6 @@ def loss(
     )
     parts = {"conf": l_conf, "type": l_type, "xy": l_xy, "angle": l_angle, "z": l_z, "sym": l_sym}
     return total, {k: float(v.detach()) for k, v in parts.items()}
-
-
-@dataclass(frozen=True)
-class Detection:
-    affordance: Affordance
-    score: float
 
 
 @torch.no_grad()

@@ -24,7 +24,7 @@ VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, q
 
 
 def rows_to_affordances(rows: torch.Tensor | np.ndarray) -> list[Affordance]:
-    from afford.data.format import decode_affordance
+    from afford.sim.affordance import decode_affordance
 
     return [decode_affordance(np.asarray(r)) for r in rows]
 

@@ -9,61 +9,15 @@ collision-free at that pose. Nothing is said about what executing it will do.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
-
 import mujoco
 import numpy as np
 
+from afford.sim.affordance import Affordance, Detection
 from afford.sim.affordance_types import REGISTRY, TYPES
 from afford.sim.constants import GRIPPER
 from afford.sim.mjcf import PROBE_BODIES, park_position
 
-__all__ = ["TYPES", "Affordance", "detect", "parametrise", "hand_pose"]
-
-
-@dataclass(frozen=True)
-class Affordance:
-    """One affordance: where and how an action can be commenced.
-
-    type: grasp, place or turn. position: the target point (x, y, z) in metres, world frame:
-    an object's centre for grasp and turn, a point on a surface for place. angle: gripper yaw
-    in degrees, [0, 360), the direction the fingers open along. symmetric: other angles at the
-    same point give equivalent results. turn: the turn affordance's execution parameter in
-    degrees, counter-clockwise seen from above: +90 or -90 in the paper (II.D fills it in), any
-    angle in [-180, 180] with continuous turns (paper V); 0 for other types and for a turn not
-    yet parametrised.
-    """
-
-    type: str
-    position: tuple[float, float, float]
-    angle: float
-    symmetric: bool
-    turn: float = 0
-
-    def __post_init__(self):
-        if self.type not in REGISTRY:
-            raise ValueError(f"unknown affordance type {self.type!r}; expected one of {tuple(REGISTRY)}")
-        if not (np.isfinite(self.turn) and -180 <= self.turn <= 180):
-            raise ValueError(f"turn must be an angle in [-180, 180] degrees (0: none), not {self.turn}")
-
-    def with_turn(self, turn: float) -> Affordance:
-        return replace(self, turn=turn)
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["position"] = [round(float(v), 5) for v in self.position]
-        d["angle"] = round(float(self.angle), 3)
-        return d
-
-    @staticmethod
-    def from_dict(d: dict) -> Affordance:
-        return Affordance(
-            d["type"],
-            tuple(float(v) for v in d["position"]),
-            float(d["angle"]),
-            bool(d["symmetric"]),
-            float(d.get("turn", 0)),
-        )
+__all__ = ["TYPES", "Affordance", "Detection", "detect", "parametrise", "hand_pose"]
 
 
 def parametrise(affordances: list[Affordance]) -> list[Affordance]:

@@ -9,9 +9,9 @@ from afford.prediction.foresight import Foresight, foresight_of
 
 def images():
     rng = np.random.default_rng(0)
-    before = rng.random((4, 128, 128)).astype(np.float32)
+    before = rng.random((128, 128, 4)).astype(np.float32)  # (H, W, C), as the NumPy side holds images
     truth = before.copy()
-    truth[:, 50:70, 50:70] = rng.random((4, 20, 20))  # something changed here
+    truth[50:70, 50:70] = rng.random((20, 20, 4))  # something changed here
     return before, truth
 
 
@@ -56,9 +56,9 @@ def test_groups_take_the_acted_on_object_and_the_side_effects_apart():
 
     for k in range(2):
         col, row = world_to_pixel(poses[k, :3]).astype(int)
-        truth[:, row - 3 : row + 3, col - 3 : col + 3] = 0.0
+        truth[row - 3 : row + 3, col - 3 : col + 3] = 0.0
     col, row = world_to_pixel(poses[0, :3]).astype(int)
-    predicted[:, row - 3 : row + 3, col - 3 : col + 3] = 0.0  # only the acted-on object drawn
+    predicted[row - 3 : row + 3, col - 3 : col + 3] = 0.0  # only the acted-on object drawn
     step = StepEffects("turn", 0, (Effect("pushed", 1),))
     f = Foresight()
     f.add(step, np.array([2, 0, 0.25, 0.02, 0, 0, 90]), poses, after, predicted, before, truth)

@@ -24,6 +24,7 @@ from torch.utils.data import Dataset as TorchDataset
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
 from afford.data.format import DataError, Dataset, dequantise, quantise
 from afford.data.torch_data import PredictionData, collate_prediction
+from afford.images import to_chw
 
 BATCH = 32
 STEPS = 4
@@ -97,7 +98,7 @@ class PredictedStates(TorchDataset):
     def __getitem__(self, k: int) -> tuple[torch.Tensor, torch.Tensor]:
         rows = self.data.sequence(int(self.sequence[k])).affordances[int(self.step[k])]
         images, (rows,) = augment(self.image(k)[None], [rows], self.config, self.rng)
-        return torch.from_numpy(np.ascontiguousarray(images[0].transpose(2, 0, 1))), torch.from_numpy(rows)
+        return to_chw(images[0]), torch.from_numpy(rows)
 
 
 def mixed_sampler(real: int, predicted: int, fraction: float, seed: int = 0) -> torch.utils.data.Sampler:

@@ -15,10 +15,7 @@ from torch.utils.data import Dataset as TorchDataset
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
 from afford.data.effects import sequence_effects, step_mask
 from afford.data.format import Dataset
-
-
-def _to_chw(images: np.ndarray) -> torch.Tensor:
-    return torch.from_numpy(np.ascontiguousarray(images.transpose(0, 3, 1, 2)))
+from afford.images import to_chw
 
 
 class RecognitionData(TorchDataset):
@@ -37,7 +34,7 @@ class RecognitionData(TorchDataset):
         i, t = self.items[k]
         seq = self.data.sequence(i)
         images, (rows,) = augment(seq.image(t)[None], [seq.affordances[t]], self.config, self.rng)
-        return _to_chw(images)[0], torch.from_numpy(rows)
+        return to_chw(images)[0], torch.from_numpy(rows)
 
 
 def collate_recognition(batch) -> tuple[torch.Tensor, list[torch.Tensor]]:
@@ -85,11 +82,11 @@ class PredictionData(TorchDataset):
         images, (actions,) = augment(images, [seq.actions[start:stop]], self.config, self.rng, noisy=[True])
         if self.effect_masks:
             return (
-                _to_chw(images[..., :-1]),
+                to_chw(images[..., :-1]),
                 torch.from_numpy(actions),
                 torch.from_numpy(images[1:, ..., -1] > 0.5),
             )
-        return _to_chw(images), torch.from_numpy(actions)
+        return to_chw(images), torch.from_numpy(actions)
 
 
 def _effect_masks(seq, start: int, stop: int) -> np.ndarray:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
+from afford.images import to_chw
 from afford.planning.goal import Goal
 from afford.planning.tree import Node, SearchResult
 from afford.sim.affordance import Col, encode_affordance
@@ -52,7 +53,7 @@ def optimise_turns(
     `start`: the (H, W, C) start image. Each restart sets all turns to one angle of
     `restarts`; the plan as given is scored too, and wins if nothing beats it."""
     turns = [i for i, a in enumerate(plan) if a.turn]
-    image = torch.from_numpy(np.ascontiguousarray(start.transpose(2, 0, 1)))[None].float()
+    image = to_chw(start[None])
     rows = torch.from_numpy(np.stack([encode_affordance(a) for a in plan]))[None]
 
     def outcome(angles: torch.Tensor) -> torch.Tensor:

@@ -90,8 +90,9 @@ def window_mse_torch(patch: np.ndarray, states):
     import torch
     import torch.nn.functional as F
 
-    chw = np.ascontiguousarray(patch.transpose(2, 0, 1))
-    g = torch.as_tensor(chw, dtype=states.dtype, device=states.device)
+    from afford.images import to_chw
+
+    g = to_chw(patch).to(dtype=states.dtype, device=states.device)
     c, h, w = g.shape
     if states.shape[1] != c:
         raise GoalError(f"goal patch has {c} channels but the states have {states.shape[1]}")

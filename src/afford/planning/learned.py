@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from afford.images import to_chw, to_hwc
 from afford.planning.tree import Node, Recognised
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
@@ -62,7 +63,7 @@ class LearnedModel:
         image = to_chw(np.stack([p.image for p in parents]))
         latent, memory, image = self.net.step(latent, memory, image, rows)
         self.p_steps += len(parents)
-        images = image.permute(0, 2, 3, 1).numpy()
+        images = to_hwc(image)
         return [(images[k], LatentState(latent[k], memory[k])) for k in range(len(parents))]
 
     def _predict_from_root(self, parents: list[Node], actions: list[Affordance]):
@@ -79,7 +80,7 @@ class LearnedModel:
             for i in range(depth + 1):
                 latent, memory, image = self.net.step(latent, memory, image, rows[:, i])
             self.p_steps += len(ks) * (depth + 1)
-            images = image.permute(0, 2, 3, 1).numpy()
+            images = to_hwc(image)
             for j, k in enumerate(ks):
                 results[k] = (images[j], LatentState(latent[j], memory[j]))
         return [results[k] for k in range(len(parents))]
@@ -90,6 +91,3 @@ def recognise_nodes(recognizer: Recognizer, nodes: list[Node]) -> list[Recognise
     return recognizer(np.stack([n.image for n in nodes]))
 
 
-def to_chw(images: np.ndarray) -> torch.Tensor:
-    """(B, H, W, C) images as the nets' float32 (B, C, H, W) tensor."""
-    return torch.from_numpy(np.ascontiguousarray(images, dtype=np.float32)).permute(0, 3, 1, 2)

@@ -18,8 +18,9 @@ import numpy as np
 import torch
 
 from afford.errors import UserError
+from afford.images import to_chw, to_hwc
 from afford.planning.goal import Goal
-from afford.planning.learned import recognise_nodes, to_chw
+from afford.planning.learned import recognise_nodes
 from afford.planning.tree import Node, Recognised
 from afford.prediction.ensemble import spread
 from afford.prediction.model import PredictionNet
@@ -93,7 +94,7 @@ class EnsembleModel:
             latent, memory, image = member.step(latent, memory, image, rows)
             out_latent.append(latent)
             out_memory.append(memory)
-            out_images.append(image.permute(0, 2, 3, 1).numpy())
+            out_images.append(to_hwc(image))
         self.p_steps += len(parents) * len(self.members)
         images = np.stack(out_images)  # (K, B, H, W, C)
         return [

@@ -18,6 +18,7 @@ import torch
 from afford.data import effects as fx
 from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
+from afford.images import to_chw, to_hwc
 from afford.prediction import foresight
 from afford.prediction.config import PredictionConfig
 from afford.prediction.model import PredictionNet
@@ -150,17 +151,17 @@ def event_pictures(net: PredictionNet, data: Dataset, out: Path) -> dict[str, st
     paths = {}
     for name, (i, t) in find_events(data).items():
         seq = data.sequence(i)
-        images = torch.from_numpy(np.stack([seq.image(k) for k in range(seq.length + 1)])).permute(0, 3, 1, 2)
+        images = to_chw(np.stack([seq.image(k) for k in range(seq.length + 1)]))
         predicted = net.rollout(images[:1], torch.from_numpy(seq.actions)[None])[0]
         top, bottom = [], []
         for k in range(seq.length + 1):
-            truth = to_pil(images[k].permute(1, 2, 0).numpy())
+            truth = to_pil(to_hwc(images[k]))
             text = "start" if k == 0 else f"{k}: after {seq.action(k - 1).type}"
             if k < seq.length:
                 truth = draw_affordances(truth, [seq.action(k)])
             top.append(label(truth, ("true " if k else "") + text + (" <- " + name if k == t + 1 else "")))
             pred = images[0] if k == 0 else predicted[k - 1]
-            bottom.append(label(to_pil(pred.permute(1, 2, 0).numpy()), "predicted" if k else "start"))
+            bottom.append(label(to_pil(to_hwc(pred)), "predicted" if k else "start"))
         path = out / f"{name.replace(' ', '-')}.png"
         vstack([hstack(top), hstack(bottom)]).save(path)
         paths[name] = str(path)

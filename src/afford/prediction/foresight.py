@@ -22,6 +22,7 @@ import torch
 from afford.data import effects as fx
 from afford.data.effects import effect_mask, object_mask
 from afford.data.format import Dataset
+from afford.images import to_chw, to_hwc
 from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
 
@@ -58,14 +59,14 @@ class Tally:
 
 
 def pixel_errors(predicted: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """(..., H, W) mean absolute error over the channels of (..., C, H, W) images."""
-    return np.abs(predicted - truth).mean(-3)
+    """(..., H, W) mean absolute error over the channels of (..., H, W, C) images."""
+    return np.abs(predicted - truth).mean(-1)
 
 
 def foresight_of(
     predicted: np.ndarray, before: np.ndarray, truth: np.ndarray, mask: np.ndarray
 ) -> float | None:
-    """Foresight of one prediction over a mask (images (C, H, W))."""
+    """Foresight of one prediction over a mask (images (H, W, C))."""
     t = Tally()
     t.add(pixel_errors(predicted, truth), pixel_errors(before, truth), mask)
     return t.foresight
@@ -110,9 +111,9 @@ def measure(predict, data: Dataset, split: str = "test", limit: int | None = Non
     pending: list[tuple] = []
 
     def flush() -> None:
-        images = torch.from_numpy(np.stack([p[1] for p in pending]))
+        images = to_chw(np.stack([p[1] for p in pending]))
         actions = torch.from_numpy(np.stack([p[2] for p in pending]))[:, None]
-        predicted = predict(images, actions)[:, 0].float().numpy()
+        predicted = to_hwc(predict(images, actions)[:, 0])
         for (step, before, action, truth, poses0, poses1), pred in zip(pending, predicted, strict=True):
             result.add(step, action, poses0, poses1, pred, before, truth)
         pending.clear()
@@ -121,8 +122,7 @@ def measure(predict, data: Dataset, split: str = "test", limit: int | None = Non
     for i in indices:
         seq = data.sequence(i)
         for t, step in enumerate(fx.sequence_effects(seq)):
-            before = seq.image(t).transpose(2, 0, 1)
-            truth = seq.image(t + 1).transpose(2, 0, 1)
+            before, truth = seq.image(t), seq.image(t + 1)
             pending.append((step, before, seq.actions[t], truth, seq.poses[t], seq.poses[t + 1]))
             if len(pending) == BATCH:
                 flush()

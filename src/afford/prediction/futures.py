@@ -22,6 +22,7 @@ import torch
 
 from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
+from afford.images import to_hwc
 from afford.recognition.infer import Recognizer
 from afford.recognition.metrics import Tally
 from afford.sim.affordance import decode_affordance
@@ -119,8 +120,8 @@ def pictures(
         top, bottom = [], []
         for s in range(length):
             act = decode_affordance(actions[0, s].numpy()).type
-            truth = to_pil(images[0, s + 1].permute(1, 2, 0).numpy())
-            pred = to_pil(predicted[s].permute(1, 2, 0).numpy())
+            truth = to_pil(to_hwc(images[0, s + 1]))
+            pred = to_pil(to_hwc(predicted[s]))
             top.append(
                 label(
                     draw_affordances(truth, [d.affordance for d in true_found[s]]),

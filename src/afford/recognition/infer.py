@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from afford.images import to_chw
 from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import RecognitionNet, fused_for_inference
 from afford.recognition.targets import decode, suppress
@@ -45,10 +46,9 @@ class Recognizer:
 
     @torch.no_grad()
     def raw(self, images: np.ndarray | torch.Tensor, batch_size: int = 256) -> torch.Tensor:
-        """Head outputs for (B, H, W, 4) float images in [0, 1] (or (B, 4, H, W) tensors)."""
-        x = torch.as_tensor(images, dtype=torch.float32)
-        if x.ndim == 4 and x.shape[-1] == self.config.in_channels and x.shape[1] != self.config.in_channels:
-            x = x.permute(0, 3, 1, 2)
+        """Head outputs for RGBD images in [0, 1]: NumPy (B, H, W, 4), or tensors (B, 4, H, W)
+        as the prediction net gives them (afford/images.py)."""
+        x = to_chw(images) if isinstance(images, np.ndarray) else images.float()
         return torch.cat([self.net(x[i : i + batch_size]) for i in range(0, len(x), batch_size)])
 
     def detections(self, raw: torch.Tensor, threshold: float | None = None) -> list[list[Detection]]:

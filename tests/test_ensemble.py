@@ -63,9 +63,10 @@ def test_the_spread_is_zero_when_the_members_agree(scene):
     model, node = _predicted(scene, same=True)
     assert np.allclose(node.state.pixel_spread, 0.0, atol=1e-6)
     goal = Goal(np.full((8, 8, 4), 0.5, np.float32))
-    score = model.score(goal, [node])
-    assert node.spread == pytest.approx(0.0, abs=1e-7)
-    assert score[0] == pytest.approx(goal.loss(node.image[None])[0], rel=1e-5)  # the mean: nothing added
+    scores = model.score(goal, [node])
+    assert scores.spread[0] == pytest.approx(0.0, abs=1e-7)
+    plain = goal.loss(node.image[None])[0]
+    assert scores.loss[0] == pytest.approx(plain, rel=1e-5)  # the mean: nothing added
 
 
 def test_members_that_differ_spread_and_their_mean_is_the_node_image(scene):

@@ -1,45 +1,11 @@
 """Guided search (beam, best-first) on a toy world model whose goal lies six steps deep."""
 
-import numpy as np
 import pytest
+from helpers import GOAL_CELL, StepWorld, bar
 
 from afford.planning.goal import Goal
 from afford.planning.strategies import search
 from afford.planning.tree import SearchConfig
-from afford.sim.affordance import Affordance, Detection
-
-CELLS = 24
-GOAL_CELL = 12  # six steps of +2 from cell 0
-
-
-def bar(p: int) -> np.ndarray:
-    """A (4, CELLS, 4) image filled from cell 0 up to cell p: nearer cells look nearer."""
-    img = np.zeros((4, CELLS, 4), dtype=np.float32)
-    img[:, : p + 1] = 1.0
-    return img
-
-
-class StepWorld:
-    """State p; a grasp at q moves to q, for q in p-2 .. p+2 (five edges a node)."""
-
-    def root(self):
-        return bar(0), 0
-
-    def recognise(self, nodes):
-        return [
-            [
-                Detection(Affordance("grasp", (float(q), 0.0, 0.0), 0.0, False))
-                for q in range(n.state - 2, n.state + 3)
-            ]
-            for n in nodes
-        ]
-
-    def predict(self, parents, actions):
-        out = []
-        for a in actions:
-            q = int(a.position[0])
-            out.append((bar(q), q) if 0 <= q < CELLS else None)
-        return out
 
 
 def config(strategy: str, **kw) -> SearchConfig:

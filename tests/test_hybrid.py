@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from test_guided import GOAL_CELL, StepWorld, bar
+from helpers import GOAL_CELL, StepWorld, bar
 
 from afford.planning.goal import Goal
 from afford.planning.hybrid import kept, plan_hybrid

@@ -136,7 +136,7 @@ def test_shipped_weights_plan_a_paper_task_that_needs_a_non_canonical_effect(sce
 def test_diagnosis_names_recognition_when_the_working_plan_is_not_recognised(scene):
     """Untrained nets recognise nothing confidently: the oracle's grasp-and-place is not in the
     learned tree, so the failure is recognition's."""
-    from test_tasks import GOOD
+    from helpers import GOOD
 
     from afford.planning.diagnose import diagnose
     from afford.planning.tasks import task_from_json

@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from test_tasks import GOOD
+from helpers import GOOD
 
 from afford.planning.run import solve
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic

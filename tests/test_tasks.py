@@ -6,33 +6,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import GOOD
 
 from afford.planning.predicates import PredicateError, parse
 from afford.planning.tasks import TaskError, load_task, save_goal_png, task_from_json
 from afford.sim.scene import ObjectSpec
 
 PAPER = sorted(Path(__file__).parents[1].joinpath("tasks", "paper").glob("*.json"))
-GOOD = {
-    "format": 1,
-    "name": "toy",
-    "scene": {
-        "objects": [{"kind": "cup", "pos": [0.0, 0.3, 0.0425]}, {"kind": "support", "pos": [0.1, 0.3, 0.03]}]
-    },
-    "goal": {
-        "type": "positive",
-        "scene": {
-            "objects": [
-                {"kind": "cup", "pos": [0.1, 0.3, 0.1025]},
-                {"kind": "support", "pos": [0.1, 0.3, 0.03]},
-            ]
-        },
-        "crop": {"centre": [0.1, 0.3, 0.06], "size": [16, 16]},
-    },
-    "max_steps": 2,
-    "success": {"on": {"object": "cup0", "host": "support0"}},
-}
-
-
 def test_the_ten_paper_tasks_load(scene):
     assert len(PAPER) == 10
     for f in PAPER:

@@ -5,7 +5,7 @@ import pytest
 
 from afford.planning.goal import Goal
 from afford.planning.strategies import search
-from afford.planning.tree import SearchConfig, edges
+from afford.planning.tree import SearchConfig, WorldModel, edges
 from afford.sim.affordance import Affordance, Detection
 
 CELLS = 8
@@ -19,7 +19,7 @@ def picture(p: int) -> np.ndarray:
     return img
 
 
-class LineWorld:
+class LineWorld(WorldModel):
     """State p; a 'grasp' at x moves the marker to cell x; a turn moves it by +-1. Every
     cell's grasp comes twice (symmetric duplicates at two gripper angles)."""
 

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from afford.images import to_chw, to_hwc
-from afford.planning.tree import Node, Recognised
+from afford.planning.tree import Node, Recognised, WorldModel
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
 from afford.sim.affordance import encode_affordance
@@ -28,7 +28,7 @@ class LatentState:
     memory: torch.Tensor  # the memory trace, shaped likewise
 
 
-class LearnedModel:
+class LearnedModel(WorldModel):
     """A `WorldModel` of the trained nets, started from the real RGBD image the caller gives
     (it needs no simulator: only the camera's view of the start)."""
 

@@ -11,14 +11,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from afford.planning.tree import Node, Recognised
+from afford.planning.tree import Node, Recognised, WorldModel
 from afford.sim.affordance import Detection
 from afford.sim.affordances import Affordance
 from afford.sim.perturb import Perturbation, reset_perturbed
 from afford.sim.scene import ObjectSpec, Scene
 
 
-class OracleModel:
+class OracleModel(WorldModel):
     """A `WorldModel` backed by a `Scene`, started from the state the caller put it in."""
 
     def __init__(self, scene: Scene):

@@ -45,7 +45,7 @@ class Node:
     parent: int = -1
     loss: float = float("nan")
     # An ensemble's world model (planning/uncertain.py): the spread of eq. (5) over its
-    # members, which `loss` then counts by the search's risk weight. 0 for one model.
+    # members, which `loss` then counts by the planner's risk weight. 0 for one model.
     spread: float = 0.0
 
     @property
@@ -56,27 +56,36 @@ class Node:
 Recognised = list[Detection]  # the affordances on one state, each with its confidence
 
 
+@dataclass
+class Scores:
+    """Each node's plan score (eq. 5 against the goal, or a model's own), and for an ensemble
+    the spread of it over the members (None: one model, no spread)."""
+
+    loss: np.ndarray
+    spread: np.ndarray | None = None
+
+
 class WorldModel(Protocol):
-    """What the search needs of a model of the world."""
+    """What the search needs of a model of the world. A model subclasses this and gives `root`,
+    `recognise` and `predict`; `score` is eq. (5) on each node's image unless the model has its
+    own (an ensemble scores the spread of its members' outcomes too)."""
 
     def root(self) -> tuple[np.ndarray, Any]:
         """The current state: its image and the model's state for it."""
+        ...
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
         """The affordances (with confidences) on each node's state."""
+        ...
 
     def predict(self, parents: list[Node], actions: list[Affordance]) -> list[tuple[np.ndarray, Any] | None]:
         """Each parent's child after its action: (image, state), or None where the action
         cannot be carried out at all."""
+        ...
 
-
-def score(model: WorldModel, goal: Goal, nodes: list[Node]) -> np.ndarray:
-    """Each node's plan score: eq. (5) on its image, or the model's own score where it has one
-    (an ensemble counts the spread of its members' outcomes)."""
-    own = getattr(model, "score", None)
-    if own is not None:
-        return own(goal, nodes)
-    return goal.loss(np.stack([n.image for n in nodes]))
+    def score(self, goal: Goal, nodes: list[Node]) -> Scores:
+        """Each node's plan score: eq. (5) of its image against the goal patch."""
+        return Scores(goal.loss(np.stack([n.image for n in nodes])))
 
 
 GUIDED_BUDGET = 2_000  # states a guided search grows unless told otherwise
@@ -179,9 +188,16 @@ class Growth:
         self.start = time.perf_counter()
         image, state = model.root()
         self.nodes = [Node((), image, state)]
-        self.nodes[0].loss = float(score(model, goal, self.nodes)[0])
+        self.scored(self.nodes)
         self.expanded = 0
         self.truncated = False  # the time limit stopped a step
+
+    def scored(self, nodes: list[Node]) -> None:
+        """Score new nodes against the goal (the model's `score`), on the nodes themselves."""
+        scores = self.model.score(self.goal, nodes)
+        for k, n in enumerate(nodes):
+            n.loss = float(scores.loss[k])
+            n.spread = 0.0 if scores.spread is None else float(scores.spread[k])
 
     def room(self) -> int:
         """States the budget still allows (the root is not counted)."""
@@ -227,9 +243,8 @@ class Growth:
                     if out is not None
                 ]
                 if new:
-                    losses = score(self.model, self.goal, new)
-                    for n, loss in zip(new, losses, strict=True):
-                        n.loss = float(loss)
+                    self.scored(new)
+                    for n in new:
                         made_here.append(len(nodes))
                         nodes.append(n)
                 bar.update(len(batch))

@@ -21,7 +21,7 @@ from afford.errors import UserError
 from afford.images import to_chw, to_hwc
 from afford.planning.goal import Goal
 from afford.planning.learned import recognise_nodes
-from afford.planning.tree import Node, Recognised
+from afford.planning.tree import Node, Recognised, Scores, WorldModel
 from afford.prediction.ensemble import spread
 from afford.prediction.model import PredictionNet
 from afford.recognition.infer import Recognizer
@@ -54,7 +54,7 @@ def risk_score(losses: np.ndarray, risk: float, negative: bool) -> tuple[np.ndar
     return mean + (-risk if negative else risk) * std, std
 
 
-class EnsembleModel:
+class EnsembleModel(WorldModel):
     """A `WorldModel` of the recognizer and K prediction nets, from the real start image."""
 
     def __init__(
@@ -109,12 +109,9 @@ class EnsembleModel:
             for j in range(len(parents))
         ]
 
-    def score(self, goal: Goal, nodes: list[Node]) -> np.ndarray:
-        """Eq. (5) per member, then `risk_score`; each node's spread is recorded on it."""
+    def score(self, goal: Goal, nodes: list[Node]) -> Scores:
+        """Eq. (5) per member, then `risk_score`: the score and its spread over the members."""
         k = len(self.members)
         stacked = np.concatenate([n.state.images for n in nodes])  # (B*K, H, W, C), node-major
         losses = goal.loss(stacked).reshape(len(nodes), k).T
-        scores, spreads = risk_score(losses, self.risk, goal.negative)
-        for n, s in zip(nodes, spreads, strict=True):
-            n.spread = float(s)
-        return scores
+        return Scores(*risk_score(losses, self.risk, goal.negative))

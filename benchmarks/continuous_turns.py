@@ -38,7 +38,7 @@ def main() -> None:
 
     from afford.planning.angles import optimise_turns
     from afford.planning.learned import LearnedModel
-    from afford.planning.run import solve
+    from afford.planning.run import PlannerConfig, solve
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
@@ -48,7 +48,7 @@ def main() -> None:
     learned = load_learned(args.weights)
     scene = Scene()
     files = sorted(Path(args.tasks).glob("*.json"))
-    plain = SearchConfig(progress=False)
+    plain = PlannerConfig(search=SearchConfig(progress=False))
     rows, curves, sweeps = [], {}, {}
     for f in files:
         task = load_task(f, scene)

@@ -43,7 +43,7 @@ def main() -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from afford.planning.run import execute_perturbed, perturbed_successes, solve
+    from afford.planning.run import PlannerConfig, execute_perturbed, perturbed_successes, solve
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
@@ -54,9 +54,8 @@ def main() -> None:
 
     perturbation = Perturbation(*[float(v) for v in args.perturb.split(",")])
     nets = load_learned(args.weights)
-    averse = (
-        SearchConfig(progress=False) if args.risk is None else SearchConfig(progress=False, risk=args.risk)
-    )
+    quiet = SearchConfig(progress=False)
+    averse = PlannerConfig(search=quiet) if args.risk is None else PlannerConfig(search=quiet, risk=args.risk)
     ways = {
         "learned": ("learned", averse),
         "ensemble, risk 0": ("ensemble", replace(averse, risk=0.0)),
@@ -81,7 +80,7 @@ def main() -> None:
         # The picture: the ensemble's best end states (by mean loss), their spread, their fate.
         scene.reset(task.scene)
         model = EnsembleModel(scene.observe(), nets.recognizer, nets.members, 0.0)
-        tree = search(model, task.goal, task.max_steps, replace(averse, risk=0.0))
+        tree = search(model, task.goal, task.max_steps, averse.search)
         ends = sorted((n for n in tree.nodes if n.depth == task.max_steps), key=lambda n: n.loss)
         shown, seen = [], set()
         for n in ends:

@@ -12,6 +12,7 @@ import torch
 from afford.cli.main import main
 from afford.data.format import Dataset
 from afford.planning.goal import Goal
+from afford.planning.run import PlannerConfig
 from afford.planning.strategies import search
 from afford.planning.tree import Node, SearchConfig
 from afford.planning.uncertain import EnsembleError, EnsembleModel, risk_score
@@ -206,6 +207,6 @@ def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scen
     nets = load_learned()
     assert len(nets.members) == 4 and nets.members[0] is nets.predictor
     task = load_task("tasks/uncertain/02-ball-near-a-tipping-edge.json", scene)
-    o = solve(task, "ensemble", scene, SearchConfig(progress=False), nets)
+    o = solve(task, "ensemble", scene, PlannerConfig(search=SearchConfig(progress=False)), nets)
     assert o.success and o.plan[-1].type == "place"  # unperturbed, the end place holds
     assert 0 < o.spread < o.loss

@@ -6,6 +6,7 @@ from helpers import GOAL_CELL, StepWorld, bar
 
 from afford.planning.goal import Goal
 from afford.planning.hybrid import kept, plan_hybrid
+from afford.planning.run import PlannerConfig
 from afford.planning.tree import SearchConfig
 from afford.sim.affordances import Affordance
 
@@ -48,14 +49,13 @@ def test_hybrid_oracle_plans_a_paper_task_from_a_checked_canonical_plan(scene):
     from afford.planning.tasks import load_task
 
     task = load_task(Path(__file__).parents[1] / "tasks/paper/01-order.json", scene)
-    o = solve(task, "hybrid-oracle", scene, SearchConfig(progress=False))
+    o = solve(task, "hybrid-oracle", scene, PlannerConfig(search=SearchConfig(progress=False)))
     assert o.source == "symbolic" and o.success and len(o.plan) == 4
 
 
 def test_the_accept_share_sets_how_close_a_kept_proposal_must_come():
-    from dataclasses import replace
 
     near = moves(2, 4, 6, 8, 10)  # 10 of the 12 cells: most of the way
-    loose = plan_hybrid(StepWorld(), Goal(bar(GOAL_CELL)), [near], 6, replace(QUIET, accept=0.5))
-    strict = plan_hybrid(StepWorld(), Goal(bar(GOAL_CELL)), [near], 6, replace(QUIET, accept=0.99))
+    loose = plan_hybrid(StepWorld(), Goal(bar(GOAL_CELL)), [near], 6, QUIET, accept=0.5)
+    strict = plan_hybrid(StepWorld(), Goal(bar(GOAL_CELL)), [near], 6, QUIET, accept=0.99)
     assert loose.source == "symbolic" and strict.source == "fallback"

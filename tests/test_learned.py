@@ -11,6 +11,7 @@ import torch
 
 from afford.cli.main import main
 from afford.planning.learned import LearnedModel
+from afford.planning.run import PlannerConfig
 from afford.planning.tree import Node
 from afford.prediction.config import PRESETS as PRED
 from afford.prediction.model import PredictionNet
@@ -128,7 +129,7 @@ def test_shipped_weights_plan_a_paper_task_that_needs_a_non_canonical_effect(sce
 
     torch.set_num_threads(2)
     task = load_task(Path(__file__).parents[1] / "tasks" / "paper" / DEMO_TASK, scene)
-    o = solve(task, "learned", scene, SearchConfig(progress=False), load_learned())
+    o = solve(task, "learned", scene, PlannerConfig(search=SearchConfig(progress=False)), load_learned())
     assert o.success, o.reason
     assert o.seconds < 20
 

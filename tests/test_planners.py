@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from helpers import GOOD
 
-from afford.planning.run import solve
+from afford.planning.run import PlannerConfig, solve
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import load_task, task_from_json
 from afford.planning.tree import SearchConfig
@@ -21,7 +21,7 @@ PAPER = ROOT / "tasks" / "paper"
 
 def test_oracle_solves_a_two_step_task(scene):
     task = task_from_json(GOOD, scene=scene)
-    o = solve(task, "oracle", scene, SearchConfig(progress=False))
+    o = solve(task, "oracle", scene, PlannerConfig(search=SearchConfig(progress=False)))
     assert o.success and [a.type for a in o.plan] == ["grasp", "place"]
     assert o.nodes == 2 and len(o.planned) == 3 and len(o.executed) == 3
 

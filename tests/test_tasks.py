@@ -13,6 +13,8 @@ from afford.planning.tasks import TaskError, load_task, save_goal_png, task_from
 from afford.sim.scene import ObjectSpec
 
 PAPER = sorted(Path(__file__).parents[1].joinpath("tasks", "paper").glob("*.json"))
+
+
 def test_the_ten_paper_tasks_load(scene):
     assert len(PAPER) == 10
     for f in PAPER:

@@ -54,6 +54,7 @@ def planners(given: str) -> tuple[str, ...]:
 
 def add_search_arguments(parser, max_nodes: bool = True) -> None:
     """How the tree grows: the paper's breadth-first search, or a guided one (paper V)."""
+    from afford.planning.run import PlannerConfig
     from afford.planning.strategies import STRATEGIES
     from afford.planning.tree import GUIDED_BUDGET, SearchConfig
 
@@ -81,10 +82,10 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
     parser.add_argument(
         "--accept",
         type=float,
-        default=SearchConfig.accept,
+        default=PlannerConfig.accept,
         metavar="SHARE",
         help="hybrid planners: a canonical plan is kept when its predicted outcome removes at least this "
-        f"share of the start's goal loss, eq. 5 (default {SearchConfig.accept})",
+        f"share of the start's goal loss, eq. 5 (default {PlannerConfig.accept})",
     )
     parser.add_argument(
         "--optimise-turns",
@@ -96,10 +97,10 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
     parser.add_argument(
         "--risk",
         type=float,
-        default=SearchConfig.risk,
+        default=PlannerConfig.risk,
         metavar="W",
         help="ensemble planner: a plan scores the members' mean goal loss (eq. 5) plus W standard "
-        f"deviations of it over the members: risk-averse (default {SearchConfig.risk}); 0: the mean alone",
+        f"deviations of it over the members: risk-averse (default {PlannerConfig.risk}); 0: the mean alone",
     )
     if max_nodes:
         parser.add_argument(
@@ -142,7 +143,9 @@ def perturbation(args):
     return perturbation
 
 
-def search_config(args, progress: bool):
+def planner_config(args, progress: bool):
+    """The planner's settings and its search's, from the command line."""
+    from afford.planning.run import PlannerConfig
     from afford.planning.tree import SearchConfig
 
     if args.beam_width < 1:
@@ -152,13 +155,13 @@ def search_config(args, progress: bool):
     if not 0 < args.accept < 1:
         raise CLIError("--accept must lie between 0 and 1")
     max_nodes = getattr(args, "max_nodes", SearchConfig.max_nodes)
-    return SearchConfig(
+    search = SearchConfig(
         progress=progress,
         max_nodes=max_nodes or None,
         strategy=args.search,
         beam_width=args.beam_width,
         budget=args.budget,
-        accept=args.accept,
-        optimise_turns=args.optimise_turns,
-        risk=args.risk,
+    )
+    return PlannerConfig(
+        search=search, accept=args.accept, optimise_turns=args.optimise_turns, risk=args.risk
     )

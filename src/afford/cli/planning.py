@@ -15,7 +15,7 @@ from afford.cli.options import (
     add_search_arguments,
     add_weights_argument,
     load_nets,
-    search_config,
+    planner_config,
 )
 from afford.cli.options import perturbation as perturbation_of
 from afford.cli.options import planners as planner_names
@@ -37,7 +37,7 @@ def cmd_plan(args) -> int:
     task = load_task(args.task, scene)
     perturbation = perturbation_of(args)
     learned = load_nets(args.weights) if args.planner in USES_NETS else None
-    outcome = solve(task, args.planner, scene, search_config(args, progress=not args.json), learned)
+    outcome = solve(task, args.planner, scene, planner_config(args, progress=not args.json), learned)
     if perturbation is not None:
         execute_perturbed(outcome, task, scene, perturbation, args.executions)
     out = Path(args.out)
@@ -78,7 +78,7 @@ def cmd_bench_tasks(args) -> int:
     planners = planner_names(args.planner)
     perturbation = perturbation_of(args)
     learned = load_nets(args.weights) if any(p in USES_NETS for p in planners) else None
-    config = search_config(args, progress=False)
+    config = planner_config(args, progress=False)
     scene = Scene()
     report = {}
     for planner in planners:
@@ -144,13 +144,13 @@ def cmd_bench_random(args) -> int:
         load_nets(args.weights)  # a missing weights folder is one line here, not a worker's traceback
     threads = max(1, (os.cpu_count() or 1) // args.workers)
     spec = BenchSpec(
-        args.max_steps,
-        planners,
-        args.weights,
-        args.time_limit,
-        threads,
-        args.min_steps,
-        search_config(args, progress=False),
+        max_steps=args.max_steps,
+        planners=planners,
+        weights=args.weights,
+        time_limit=args.time_limit,
+        threads=threads,
+        min_steps=args.min_steps,
+        planner=planner_config(args, progress=False),
     )
     rows = []
     with tqdm(total=args.n, desc="bench random", unit="task", disable=args.json) as bar:

@@ -24,7 +24,7 @@ import numpy as np
 
 from afford.planning.learned import LearnedModel
 from afford.planning.oracle import execute_plan
-from afford.planning.run import Outcome, solve
+from afford.planning.run import Outcome, PlannerConfig, solve
 from afford.planning.tasks import Task
 from afford.planning.tree import Node, SearchConfig, edges
 from afford.recognition.metrics import matches
@@ -80,10 +80,10 @@ class Diagnosis:
         return "\n".join(lines)
 
 
-def diagnose(task: Task, scene: Scene, learned, config: SearchConfig | None = None) -> Diagnosis:
+def diagnose(task: Task, scene: Scene, learned, config: PlannerConfig | None = None) -> Diagnosis:
     """Plan `task` with the learned planner and the oracle, then replay the oracle's plan
     through the learned model to name the cause of a failure (module docstring)."""
-    config = config or SearchConfig(progress=False)
+    config = config or PlannerConfig(search=SearchConfig(progress=False))
     mine = solve(task, "learned", scene, config, learned)
     chosen_true = float(task.goal.loss(mine.executed[-1][None])[0])
     if mine.success:  # nothing to explain, and no oracle tree to grow
@@ -98,7 +98,7 @@ def diagnose(task: Task, scene: Scene, learned, config: SearchConfig | None = No
     node = Node((), image, state)
     steps = []
     for i, action in enumerate(oracle.plan):
-        found = edges(model.recognise([node])[0], config.merge_radius)
+        found = edges(model.recognise([node])[0], config.search.merge_radius)
         same = [e for e in found if e.type == action.type and e.turn == action.turn]
         near = min(
             (float(np.linalg.norm(np.subtract(e.position, action.position))) for e in same), default=None

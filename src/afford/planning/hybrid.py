@@ -21,7 +21,7 @@ from afford.planning.tree import Growth, SearchConfig, SearchResult, WorldModel
 from afford.sim.affordances import Affordance
 
 PROPOSALS = 32  # shortest canonical plans checked per task (drawn as the symbolic planner's sample)
-ACCEPT = SearchConfig.accept  # share of the start's eq. (5) loss a proposal's outcome must remove
+ACCEPT = 0.5  # the share of the start's eq. (5) loss a proposal's outcome must remove
 
 
 @dataclass
@@ -71,11 +71,11 @@ def plan_hybrid(
     proposals: list[tuple[Affordance, ...]],
     max_steps: int,
     config: SearchConfig | None = None,
+    accept: float = ACCEPT,
 ) -> HybridResult:
-    """The best proposal the world model keeps (`config.accept`), else the tree search
-    (`config.strategy`)."""
+    """The best proposal the world model keeps (its predicted outcome removes at least `accept`
+    of the start's loss), else the tree search (`config.strategy`)."""
     config = config or SearchConfig()
-    accept = config.accept
     start = time.perf_counter()
     tree, ends = check_proposals(model, goal, proposals, config)
     start_loss = tree.nodes[0].loss

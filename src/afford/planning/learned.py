@@ -89,5 +89,3 @@ class LearnedModel(WorldModel):
 def recognise_nodes(recognizer: Recognizer, nodes: list[Node]) -> list[Recognised]:
     """The recognizer on each node's image: its detections (affordances with confidences)."""
     return recognizer(np.stack([n.image for n in nodes]))
-
-

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from afford.planning.tree import SearchConfig
+from afford.planning.run import USES_NETS, PlannerConfig, solve
 
 Z95 = 1.959964  # two-sided 95% normal quantile
 ORACLE_BATCH = 8  # the oracle's predict batch: small, so its time limit is checked often
@@ -31,7 +31,7 @@ class BenchSpec:
     time_limit: float | None = 60.0  # seconds of tree search per task and planner
     threads: int = 1  # torch threads per worker
     min_steps: int = 1
-    search: SearchConfig = field(default_factory=lambda: SearchConfig(progress=False))  # strategy, budget
+    planner: PlannerConfig = field(default_factory=PlannerConfig)  # the search's strategy and budget too
 
 
 def wilson(successes: float, n: int) -> tuple[float, float]:
@@ -53,7 +53,6 @@ _state: dict = {}
 def _init(spec: BenchSpec) -> None:
     import torch
 
-    from afford.planning.run import USES_NETS
     from afford.sim.scene import Scene
 
     torch.set_num_threads(spec.threads)
@@ -69,7 +68,6 @@ def run_seed(seed: int) -> dict | None:
     """Plan the random task of `seed` with every planner (in a worker): its row, or None when
     the seed makes no task."""
     from afford.planning.random_tasks import random_task
-    from afford.planning.run import solve
 
     spec: BenchSpec = _state["spec"]
     scene = _state["scene"]
@@ -78,8 +76,9 @@ def run_seed(seed: int) -> dict | None:
         return None
     row: dict = {"task": task.name, "seed": seed, "steps": task.max_steps}
     for planner in spec.planners:
-        batch = ORACLE_BATCH if planner.endswith("oracle") else spec.search.batch_size
-        config = replace(spec.search, progress=False, time_limit=spec.time_limit, batch_size=batch)
+        batch = ORACLE_BATCH if planner.endswith("oracle") else spec.planner.search.batch_size
+        search = replace(spec.planner.search, progress=False, time_limit=spec.time_limit, batch_size=batch)
+        config = replace(spec.planner, search=search)
         o = solve(task, planner, scene, config, _state.get("learned"))
         row[planner] = {
             "solved": o.success,

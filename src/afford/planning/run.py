@@ -10,20 +10,36 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from afford.planning.hybrid import PROPOSALS, plan_hybrid
+from afford.planning.hybrid import ACCEPT, PROPOSALS, plan_hybrid
 from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel, execute_plan
 from afford.planning.strategies import search
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchConfig, SearchResult
-from afford.planning.uncertain import EnsembleModel
+from afford.planning.uncertain import RISK, EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
 from afford.sim.perturb import Perturbation, piles
 from afford.sim.scene import Scene
 
 DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """How a planner plans: the tree search's settings, and each planner's own."""
+
+    search: SearchConfig = field(default_factory=SearchConfig)
+    # Hybrid planners (planning/hybrid.py): the share of the start's eq. (5) loss a canonical
+    # plan's predicted outcome must remove to be kept.
+    accept: float = ACCEPT
+    # The learned planner: optimise the turn angles of the best plan with turns by gradient
+    # descent through the prediction net (planning/angles.py) and keep it when it is closer.
+    optimise_turns: bool = False
+    # The ensemble planner (planning/uncertain.py): a plan scores eq. (5) averaged over the
+    # members plus this many standard deviations of it (risk-averse); 0 scores the mean alone.
+    risk: float = RISK
 
 
 @dataclass
@@ -86,17 +102,18 @@ class Outcome:
 
 
 def solve(
-    task: Task, planner: str, scene: Scene, config: SearchConfig | None = None, learned=None
+    task: Task, planner: str, scene: Scene, config: PlannerConfig | None = None, learned=None
 ) -> Outcome:
-    """Plan `task` with `planner`; `learned` is the (Recognizer, PredictionNet) pair for "learned"."""
+    """Plan `task` with `planner`; `learned`: the `LearnedNets` for the planners that use them
+    (None: the shipped ones)."""
     if planner not in PLANNER_REGISTRY:
         raise ValueError(f"unknown planner {planner!r}; expected one of {PLANNERS}")
-    return PLANNER_REGISTRY[planner](task, scene, config or SearchConfig(), learned)
+    return PLANNER_REGISTRY[planner](task, scene, config or PlannerConfig(), learned)
 
 
-def _oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     scene.reset(task.scene)
-    return _solve_search(task, "oracle", OracleModel(scene), scene, config)
+    return _solve_search(task, "oracle", OracleModel(scene), scene, config.search)
 
 
 def _nets(learned):
@@ -108,11 +125,11 @@ def _nets(learned):
     return learned
 
 
-def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     learned = _nets(learned)
     scene.reset(task.scene)
     model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
-    result = search(model, task.goal, task.max_steps, config)
+    result = search(model, task.goal, task.max_steps, config.search)
     if config.optimise_turns:
         from afford.planning.angles import with_optimised_turns
 
@@ -120,11 +137,11 @@ def _learned(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome
     return _judge(task, "learned", result, scene)
 
 
-def _ensemble(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     learned = _nets(learned)
     scene.reset(task.scene)
     model = EnsembleModel(scene.observe(), learned.recognizer, learned.members, config.risk)
-    result = search(model, task.goal, task.max_steps, config)
+    result = search(model, task.goal, task.max_steps, config.search)
     outcome = _judge(task, "ensemble", result, scene)
     outcome.spread = result.nodes[result.best].spread
     return outcome
@@ -155,11 +172,11 @@ def perturbed_successes(
     ]
 
 
-def _symbolic(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _symbolic(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     return _solve_symbolic(task, scene)
 
 
-def _hybrid(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     learned = _nets(learned)
     return _solve_hybrid(
         task,
@@ -170,7 +187,7 @@ def _hybrid(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
     )
 
 
-def _hybrid_oracle(task: Task, scene: Scene, config: SearchConfig, learned) -> Outcome:
+def _hybrid_oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     return _solve_hybrid(task, "hybrid-oracle", lambda start: OracleModel(scene), scene, config)
 
 
@@ -179,14 +196,15 @@ def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConf
     return _judge(task, name, search(model, task.goal, task.max_steps, config), scene)
 
 
-def _solve_hybrid(task: Task, name: str, make_model, scene: Scene, config: SearchConfig) -> Outcome:
+def _solve_hybrid(task: Task, name: str, make_model, scene: Scene, config: PlannerConfig) -> Outcome:
     """Canonical proposals checked by a world model, search as the fallback (`hybrid.py`).
     `make_model(start image)` builds the world model on the scene reset to the task's start."""
     proposals = plan_symbolic(
         scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
     )
     scene.reset(task.scene)
-    hybrid = plan_hybrid(make_model(scene.observe()), task.goal, proposals.plans, task.max_steps, config)
+    model = make_model(scene.observe())
+    hybrid = plan_hybrid(model, task.goal, proposals.plans, task.max_steps, config.search, config.accept)
     outcome = _judge(task, name, hybrid.search, scene, source=hybrid.source)
     outcome.seconds += proposals.seconds
     outcome.nodes += proposals.expanded
@@ -204,17 +222,17 @@ def _judge(task: Task, name: str, result: SearchResult, scene: Scene, source: st
         "" if ex.success else f"the success predicate ({task.success.describe()}) is false after execution"
     )
     return Outcome(
-        task.name,
-        name,
-        result.plan,
-        planned,
-        ex.images,
-        ex.success,
-        len(result.nodes) - 1,
-        result.seconds,
-        result.loss,
-        reason,
-        ex.executed,
+        task=task.name,
+        planner=name,
+        plan=result.plan,
+        planned=planned,
+        executed=ex.images,
+        success=ex.success,
+        nodes=len(result.nodes) - 1,
+        seconds=result.seconds,
+        loss=result.loss,
+        reason=reason,
+        steps_executed=ex.executed,
         truncated=result.truncated,
         source=source,
     )
@@ -227,14 +245,14 @@ def _solve_symbolic(task: Task, scene: Scene) -> Outcome:
         scene.reset(task.scene)
         start = scene.observe()
         return Outcome(
-            task.name,
-            "symbolic",
-            None,
-            [start],
-            [start],
-            False,
-            result.expanded,
-            result.seconds,
+            task=task.name,
+            planner="symbolic",
+            plan=None,
+            planned=[start],
+            executed=[start],
+            success=False,
+            nodes=result.expanded,
+            seconds=result.seconds,
             reason=f"no plan of at most {task.max_steps} steps reaches the goal by canonical effects",
             success_rate=0.0,
         )
@@ -254,14 +272,14 @@ def _solve_symbolic(task: Task, scene: Scene) -> Outcome:
             + (f" (sampled from {result.total})" if result.total > len(result.plans) else "")
         )
     return Outcome(
-        task.name,
-        "symbolic",
-        result.plan,
-        planned,
-        ex.images,
-        ex.success,
-        result.expanded,
-        result.seconds,
+        task=task.name,
+        planner="symbolic",
+        plan=result.plan,
+        planned=planned,
+        executed=ex.images,
+        success=ex.success,
+        nodes=result.expanded,
+        seconds=result.seconds,
         reason=reason,
         steps_executed=ex.executed,
         success_rate=rate,

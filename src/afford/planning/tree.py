@@ -89,7 +89,6 @@ class WorldModel(Protocol):
 
 
 GUIDED_BUDGET = 2_000  # states a guided search grows unless told otherwise
-RISK = 1.0  # the ensemble planner's default weight on the spread of a plan's outcome
 
 
 @dataclass(frozen=True)
@@ -114,15 +113,6 @@ class SearchConfig:
     # no limit; set, it also cuts breadth-first short (to compare strategies on one budget).
     budget: int | None = None
     pop: int = 8  # best-first: the best open nodes expanded together (one batch for the nets)
-    # Hybrid planners (planning/hybrid.py): the share of the start's eq. (5) loss a canonical
-    # plan's predicted outcome must remove to be kept.
-    accept: float = 0.5
-    # The learned planner: optimise the turn angles of the best plan with turns by gradient
-    # descent through the prediction net (planning/angles.py) and keep it when it is closer.
-    optimise_turns: bool = False
-    # The ensemble planner (planning/uncertain.py): a plan scores eq. (5) averaged over the
-    # members plus this many standard deviations of it (risk-averse); 0 scores the mean alone.
-    risk: float = RISK
 
 
 class TreeTooLarge(UserError):

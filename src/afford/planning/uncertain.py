@@ -28,6 +28,8 @@ from afford.recognition.infer import Recognizer
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 
+RISK = 1.0  # the ensemble planner's default weight on the spread of a plan's outcome
+
 
 class EnsembleError(UserError):
     """An ensemble planner without an ensemble; the message says where members go."""

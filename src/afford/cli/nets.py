@@ -77,7 +77,7 @@ def cmd_eval(args) -> int:
 
         if args.run is None:
             folder = Path(args.out)
-            result = evaluate_shipped(args.data, folder)
+            result = evaluate_shipped(load_nets(None).recognizer, args.data, folder)
         else:
             _check_run(args.run)
             result, folder = evaluate(args.run, args.data, checkpoint=args.checkpoint), Path(args.run)

@@ -85,12 +85,9 @@ def evaluate(run: str | Path, data_dir: str | Path, pictures: int = 6, checkpoin
     return result | table1(recognizer, data, run / "detections", pictures)
 
 
-def evaluate_shipped(data_dir: str | Path, out: Path, pictures: int = 6) -> dict:
-    """Table 1 for the weights shipped in the package, at their shipped cut-off (nothing is
-    tuned: a user checks the shipped net on their own data)."""
-    from afford.shipped import load_learned
-
-    recognizer = load_learned().recognizer
+def evaluate_shipped(recognizer: Recognizer, data_dir: str | Path, out: Path, pictures: int = 6) -> dict:
+    """Table 1 for shipped weights (`afford/shipped.py` loads them), at their shipped cut-off
+    (nothing is tuned: a user checks the shipped net on their own data)."""
     result = {"run": "shipped", "threshold": recognizer.threshold}
     return result | table1(recognizer, Dataset(data_dir), out / "detections", pictures)
 

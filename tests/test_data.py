@@ -22,13 +22,12 @@ from afford.data.format import (
     MANIFEST,
     DataError,
     Dataset,
-    decode_affordance,
-    encode_affordance,
     shard_path,
     verify,
 )
 from afford.data.generate import GenerateConfig, generate
 from afford.sim import camera
+from afford.sim.affordance import decode_affordance, encode_affordance
 from afford.sim.affordances import Affordance
 
 
@@ -56,6 +55,7 @@ def _same(a: Dataset, b: Dataset, i: int) -> bool:
     )
 
 
+@pytest.mark.slow
 def test_two_workers_give_identical_content(small, tmp_path):
     proc = _generate_cli(tmp_path / "two", N, workers=2)
     out, err = proc.communicate(timeout=300)
@@ -65,6 +65,7 @@ def test_two_workers_give_identical_content(small, tmp_path):
     assert all(_same(a, b, i) for i in range(N))
 
 
+@pytest.mark.slow
 def test_killed_generate_resumes_to_exactly_n(tmp_path):
     root, n = tmp_path / "killed", 10
     proc = _generate_cli(root, n, workers=1, start_new_session=True)

@@ -47,6 +47,7 @@ def _children(pid: int) -> list[int]:
     return found
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("net", ["recognition", "prediction"])
 def test_torchrun_trains_on_two_ranks_and_rank_0_alone_writes(net, small_dataset, tmp_path):
     run = tmp_path / "run"
@@ -61,6 +62,7 @@ def test_torchrun_trains_on_two_ranks_and_rank_0_alone_writes(net, small_dataset
     assert (run / "last.safetensors").is_file() and (run / "curves.png").is_file()
 
 
+@pytest.mark.slow
 def test_a_torchrun_run_killed_mid_way_resumes_from_its_checkpoint(small_dataset, tmp_path):
     run = tmp_path / "run"
     args = ["train", "recognition", "--data", str(small_dataset), "--preset", "tiny", "--out", str(run)]

@@ -98,7 +98,8 @@ def test_the_ensemble_search_scores_every_state_and_needs_two_members(scene):
         EnsembleModel(start, recognizer, members, 1.0), goal, 1, SearchConfig(progress=False, budget=12)
     )
     assert len(result.nodes) > 1 and all(np.isfinite(n.loss) for n in result.nodes)
-    assert all(n.spread >= 0 for n in result.nodes) and any(n.spread > 0 for n in result.nodes[1:])
+    assert result.nodes[0].spread == pytest.approx(0.0, abs=1e-9)  # every member starts from the real image
+    assert all(n.spread > 0 for n in result.nodes[1:])  # untrained members part at once
     with pytest.raises(EnsembleError, match="at least 2"):
         EnsembleModel(start, recognizer, members[:1], 1.0)
 
@@ -173,8 +174,10 @@ def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, cap
         [*plan, "--weights", str(tmp_path / "two"), "--perturb", "0.005", "--executions", "2", "--json"]
     )
     record = json.loads(capsys.readouterr().out)
-    assert code in (0, 1) and record["planner"] == "ensemble" and record["spread"] >= 0
-    assert record["perturbed_executions"] == 2 and 0 <= record["perturbed_success_rate"] <= 1
+    # Two members that differ (one exported afresh, untrained): the plan's end has a spread.
+    assert code == (0 if record["solved"] else 1) and record["planner"] == "ensemble"
+    assert record["spread"] > 0 and record["plan_length"] >= 1
+    assert record["perturbed_executions"] == 2 and record["perturbed_success_rate"] in (0, 0.5, 1)
 
 
 def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(scene):
@@ -199,6 +202,7 @@ def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(s
         assert rests_on(scene, "block0", "support0") == holds
 
 
+@pytest.mark.slow
 def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scene):
     from afford.planning.run import solve
     from afford.planning.tasks import load_task

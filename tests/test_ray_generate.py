@@ -20,6 +20,7 @@ def _shard_bytes(root: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted((root / "shards").glob("*.npz"))}
 
 
+@pytest.mark.slow
 def test_ray_on_a_local_instance_writes_the_same_shards_as_local_workers(ray, small_dataset, tmp_path):
     from afford.data.generate import GenerateConfig, generate
 
@@ -56,6 +57,7 @@ def _ray_shard_workers(ancestor: int) -> list[int]:
     return pids
 
 
+@pytest.mark.slow
 def test_a_ray_worker_killed_mid_run_still_gives_every_sequence(ray, tmp_path):
     from afford.data.format import Dataset, read_manifest, shard_status
 

@@ -1,4 +1,4 @@
-"""Every CLI command at toy size, for real, in a subprocess."""
+"""The scene and demo commands at toy size, for real, in a subprocess; Ctrl-C in any command."""
 
 import json
 import subprocess

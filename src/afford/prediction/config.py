@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from afford.sim.affordances import TYPES
+from afford.sim.camera import SIZE
 
 
 @dataclass(frozen=True)
@@ -17,7 +18,7 @@ class PredictionConfig:
     conv_channels: int = 8  # 2 convolutions, 3x3, stride 2: 128x128 -> 32x32x8 = 8192
     dense: tuple[int, ...] = (512,)  # dense layers between the 8192 conv features and the latent
     latent: int = 128
-    image_size: int = 128
+    image_size: int = SIZE  # the camera's
     p_layers: int = 10  # dense P^a: tanh layers, each 2 x latent wide (state half | memory half)
     # --- spatial: E's strided convolutions set the grid (128 / 2^3 = 16); P^a residual blocks
     # on it; D's upsampling stages back to 64 x 64, then a stage on 2x2 pixel blocks that also

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from afford.sim.affordances import TYPES
+from afford.sim.camera import SIZE
 
 
 @dataclass(frozen=True)
@@ -17,7 +18,7 @@ class RecognitionConfig:
     stride: int = 4  # the one detection layer: a 32x32 grid on 128x128 (the authors')
     anchors: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)  # angle anchors, degrees
     types: tuple[str, ...] = TYPES
-    image_size: int = 128
+    image_size: int = SIZE  # the camera's
     # Targets and losses. The confidence target at an assigned cell: 1 - conf_quality +
     # conf_quality * the quality of the cell's regression (targets.quality: Gaussians of its
     # position and angle errors, widths below); 0 keeps a plain 1.

@@ -98,28 +98,37 @@ def test_eval_of_a_missing_run(small_dataset, tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_sigterm_saves_a_checkpoint_and_resume_continues(small_dataset, tmp_path):
+@pytest.mark.parametrize("net, to_group", [("recognition", False), ("prediction", True)])
+def test_sigterm_saves_a_checkpoint_and_resume_continues(net, to_group, small_dataset, tmp_path):
+    """SIGTERM to the trainer, or to its whole process group with a batch-loading worker in it
+    (as `pkill -f` or Ctrl-C in a terminal would): a checkpoint is saved either way."""
+    import os
     import signal
     import subprocess
     import sys
     import time
 
     run = tmp_path / "run"
-    cmd = [sys.executable, "-m", "afford.cli.main", "train", "recognition", "--data", str(small_dataset)]
+    cmd = [sys.executable, "-m", "afford.cli.main", "train", net, "--data", str(small_dataset)]
     cmd += ["--preset", "tiny", "--out", str(run), "--threads", "1", "--steps", "100000"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    if to_group:
+        cmd += ["--set", "loader_workers=1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=to_group)
     log = run / "log.jsonl"
     deadline = time.time() + 120
     # Wait for the first logged training step (an event, not a guess of how long it takes).
     while not (log.exists() and '"train/loss"' in log.read_text()) and time.time() < deadline:
         time.sleep(0.05)
     assert log.exists(), "training logged no step in time"
-    proc.send_signal(signal.SIGTERM)
-    out, _ = proc.communicate(timeout=60)
-    assert proc.returncode == 130 and b"run the same command again" in out
+    if to_group:
+        os.killpg(proc.pid, signal.SIGTERM)
+    else:
+        proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and b"run the same command again" in out, err.decode()[-500:]
     from afford.training.checkpoint import read_checkpoint
 
-    _, meta = read_checkpoint(run / "last.safetensors", "recognition")
+    _, meta = read_checkpoint(run / "last.safetensors", net)
     assert meta["step"] > 0
 
 

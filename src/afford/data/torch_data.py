@@ -8,6 +8,8 @@ Images come out as (4, H, W) float32 in [0, 1]; affordance rows stay in the worl
 
 from __future__ import annotations
 
+import signal
+
 import numpy as np
 import torch
 from torch.utils.data import Dataset as TorchDataset
@@ -119,6 +121,14 @@ def collate_prediction(batch) -> tuple[torch.Tensor, ...]:
 
 
 def worker_init(worker_id: int) -> None:
-    """DataLoader workers: each its own augmentation stream."""
+    """DataLoader workers: each its own augmentation stream, and deaf to Ctrl-C and SIGTERM.
+
+    A stop signal sent to the whole process group (Ctrl-C in a terminal, `pkill -f`) reaches the
+    workers too; a worker that died of it made the training loop fail on the lost worker before
+    it could save its checkpoint. Ignoring it here leaves the stop to the loop, which saves
+    RUN/last.safetensors and then ends its workers itself.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     info = torch.utils.data.get_worker_info()
     info.dataset.rng = np.random.default_rng([info.seed % 2**32, worker_id])

@@ -89,6 +89,7 @@ def test_risk_prefers_the_outcome_the_members_agree_on():
     assert np.argmax(negative) == 0
 
 
+@pytest.mark.slow
 def test_the_ensemble_search_scores_every_state_and_needs_two_members(scene):
     recognizer, members = _nets(2, same=False)
     scene.reset(SPECS)

@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import pytest
 from helpers import GOAL_CELL, StepWorld, bar
 
 from afford.planning.goal import Goal
@@ -44,6 +45,7 @@ def test_keeping_needs_a_proposal_to_close_half_the_distance():
     assert kept(negative, 0.1, 0.2) and not kept(negative, 0.1, 0.19) and not kept(negative, 0.0, 0.0)
 
 
+@pytest.mark.slow
 def test_hybrid_oracle_plans_a_paper_task_from_a_checked_canonical_plan(scene):
     from afford.planning.run import solve
     from afford.planning.tasks import load_task

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from helpers import GOOD
 
 from afford.planning.run import PlannerConfig, solve
@@ -124,6 +125,7 @@ def test_long_random_tasks_hold_at_least_min_steps_executions(scene):
     assert made and all(5 <= t.max_steps <= 6 for t in made)
 
 
+@pytest.mark.slow
 def test_symbolic_baseline_is_judged_by_all_its_equally_short_plans(scene):
     # Task 4 (ball first, then cup): canonically the two orders are equally short, and only one
     # keeps the block balanced. The baseline is judged by both, whatever the scan order.
@@ -182,6 +184,7 @@ def test_search_options_out_of_range_are_refused_in_one_line(capsys):
         assert r.returncode == 2 and named in r.stderr and r.stderr.count("\n") == 1, args
 
 
+@pytest.mark.slow
 def test_bench_random_gives_the_same_tasks_and_results_on_two_workers():
     import torch
 

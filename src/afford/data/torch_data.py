@@ -70,6 +70,7 @@ class PredictionData(TorchDataset):
         self.random_start = random_start
         self.rng = np.random.default_rng(seed)
         self.effect_masks = effect_masks
+        self._labels: dict[int, list] = {}  # a sequence's effect labels, made once per process
 
     def __len__(self) -> int:
         return len(self.indices)
@@ -80,7 +81,10 @@ class PredictionData(TorchDataset):
         stop = min(seq.length, start + self.max_steps)
         images = np.stack([seq.image(t) for t in range(start, stop + 1)])
         if self.effect_masks:  # a fifth channel, so that shifts and mirrors move it with the image
-            images = np.concatenate([images, _effect_masks(seq, start, stop)[..., None]], -1)
+            if seq.index not in self._labels:
+                self._labels[seq.index] = sequence_effects(seq)
+            masks = _effect_masks(seq, self._labels[seq.index], start, stop)
+            images = np.concatenate([images, masks[..., None]], -1)
         images, (actions,) = augment(images, [seq.actions[start:stop]], self.config, self.rng, noisy=[True])
         if self.effect_masks:
             return (
@@ -91,10 +95,9 @@ class PredictionData(TorchDataset):
         return to_chw(images), torch.from_numpy(actions)
 
 
-def _effect_masks(seq, start: int, stop: int) -> np.ndarray:
+def _effect_masks(seq, labels: list, start: int, stop: int) -> np.ndarray:
     """(stop - start + 1, H, W) float32: state t's mask shows where step t - 1 had a side effect
     (the start state's is empty)."""
-    labels = sequence_effects(seq)
     masks = np.zeros((stop - start + 1, *seq.rgb.shape[1:3]), np.float32)
     for t in range(start, stop):
         if not labels[t].canonical:

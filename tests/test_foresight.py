@@ -65,3 +65,26 @@ def test_groups_take_the_acted_on_object_and_the_side_effects_apart():
     assert f.acted["turn"].foresight == pytest.approx(1.0)
     assert f.side["turn"].foresight == pytest.approx(0.0)
     assert f.kinds["pushed"].foresight == pytest.approx(0.0) and f.acted["grasp"].executions == 0
+
+
+def test_an_effect_drawn_on_an_object_that_stayed_counts_against_the_still_objects():
+    from afford.sim.camera import world_to_pixel
+
+    before, _ = images()
+    truth = before.copy()
+    poses = np.full((3, 7), np.nan)
+    poses[0] = [0.0, 0.25, 0.02, 1, 0, 0, 0]  # acted on
+    poses[1] = [0.1, 0.35, 0.02, 1, 0, 0, 0]  # stays put
+    col, row = world_to_pixel(poses[0, :3]).astype(int)
+    truth[row - 3 : row + 3, col - 3 : col + 3] = 0.0
+    step = StepEffects("grasp", 0, ())
+    action = np.array([0, 0, 0.0, 0.25, 0.02, 0, 0])
+    faithful, imagined = Foresight(), Foresight()
+    faithful.add(step, action, poses, poses, truth, before, truth)
+    drawn = truth.copy()
+    col, row = world_to_pixel(poses[1, :3]).astype(int)
+    drawn[row - 3 : row + 3, col - 3 : col + 3] = 1.0  # the still object drawn as if it moved
+    imagined.add(step, action, poses, poses, drawn, before, truth)
+    assert faithful.still["grasp"].error == pytest.approx(0.0)
+    assert imagined.still["all"].error > 0.01 and imagined.still["turn"].executions == 0
+    assert faithful.side["all"].executions == 0  # a canonical step has no side group

@@ -177,13 +177,15 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     i, t, step = next((i, t, s) for i, t, s in labelled if not s.canonical)
     seq = data.sequence(i)
     expected = step_mask(step, seq.poses[t], seq.poses[t + 1], seq.actions[t])
-    plain = PredictionData(data, "train", random_start=False, effect_masks=True)
+    plain = PredictionData(data, "train", random_start=False, effect_masks="effects")
     plain.indices = [i]
     images, actions, effects = plain[0]
     assert effects.shape == (seq.length, *images.shape[2:]) and effects.dtype == torch.bool
     assert np.array_equal(effects[t].numpy(), expected) and expected.any()
     mirror = AugmentConfig(shift_px=0, mirror=True)
-    mirrored = PredictionData(data, "train", augment_config=mirror, random_start=False, effect_masks=True)
+    mirrored = PredictionData(
+        data, "train", augment_config=mirror, random_start=False, effect_masks="effects"
+    )
     mirrored.indices = [i]
     while True:  # the mirror is drawn half the time
         m_images, _, m_effects = mirrored[0]
@@ -192,6 +194,27 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     assert np.array_equal(m_effects[t].numpy(), expected[:, ::-1])
     batch = collate_prediction([plain[0], plain[0]])
     assert len(batch) == 4 and batch[3].shape == (2, seq.length, *images.shape[2:])
+
+
+def test_the_objects_region_covers_every_object_whether_or_not_it_took_an_effect(small_dataset):
+    from afford.data.effects import disks, sequence_effects
+    from afford.data.format import Dataset
+    from afford.data.torch_data import PredictionData
+
+    data = Dataset(small_dataset)
+    i = data.indices("train")[0]
+    seq = data.sequence(i)
+    run = PredictionData(data, "train", random_start=False, effect_masks="objects")
+    run.indices = [i]
+    _, _, regions = run[0]
+    labels = sequence_effects(seq)
+    for t in range(seq.length):
+        on_table = [seq.poses[t][k, :3] for k in range(len(seq.slots)) if not np.isnan(seq.poses[t][k, 0])]
+        assert regions[t].numpy()[disks(on_table)].all()  # canonical steps are weighed too
+        assert regions[t].float().mean() < 0.5
+    assert any(s.canonical for s in labels)
+    with pytest.raises(ValueError, match="unknown effect region"):
+        PredictionData(data, "train", effect_masks="everywhere")
 
 
 def test_the_effect_loss_counts_only_the_effect_pixels():

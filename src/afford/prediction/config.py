@@ -80,6 +80,10 @@ class PredictionConfig:
     # Weight of the squared error on the pixels where a step had a side effect, as a mean over
     # those pixels (train.sequence_loss); 0: off, and the batches carry no effect masks.
     loss_effect: float = 0.0
+    # Where that squared error is taken (data/torch_data.REGIONS): "effects", the pixels of
+    # the side effects that happened (weighs only one way: the net learns to draw effects where
+    # none follow); "objects", every object's pixels in every step, effect or not.
+    effect_region: str = "effects"
 
     @property
     def latent_size(self) -> int:

@@ -10,6 +10,11 @@ before and after the step; over those pixels
 so drawing the truth scores 1 and drawing nothing new scores 0 (below 0: worse than no change).
 "Acted on" is the object the action grasps, places or turns; "side" the objects that took a
 side effect (data/effects.py), per action type and per kind of effect.
+
+The other way round, "still": the objects that neither were acted on nor took an effect, where
+copying the input is right and any change drawn is an effect imagined; there the prediction's
+mean absolute error itself is reported (a net that draws side effects everywhere scores well
+on "side" and badly here).
 """
 
 from __future__ import annotations
@@ -49,10 +54,16 @@ class Tally:
     def foresight(self) -> float | None:
         return None if self.copied <= 0 else 1.0 - self.predicted / self.copied
 
+    @property
+    def error(self) -> float | None:
+        """The prediction's mean absolute error per pixel (and channel) of the group."""
+        return None if not self.pixels else self.predicted / self.pixels
+
     def as_dict(self) -> dict:
-        value = self.foresight
+        value, error = self.foresight, self.error
         return {
             "foresight": None if value is None else round(value, 4),
+            "error": None if error is None else round(error, 5),
             "executions": self.executions,
             "pixels": self.pixels,
         }
@@ -79,6 +90,7 @@ class Foresight:
     acted: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
     side: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
     kinds: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in fx.KINDS})
+    still: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
 
     def add(self, step: fx.StepEffects, action, before_poses, after_poses, predicted, before, truth) -> None:
         err, copy = pixel_errors(predicted, truth), pixel_errors(before, truth)
@@ -94,12 +106,22 @@ class Foresight:
             for kind in step.kinds:
                 of_kind = [e for e in step.effects if e.kind == kind]
                 self.kinds[kind].add(err, copy, effect_mask(of_kind, before_poses, after_poses, place))
+        concerned = {step.acted, *step.affected}
+        still = [
+            k for k in range(len(before_poses)) if k not in concerned and not np.isnan(before_poses[k, 0])
+        ]
+        mask = object_mask(before_poses, after_poses, still)
+        if step.effects or step.acted is not None:  # keep the concerned objects' own pixels out
+            mask &= ~object_mask(before_poses, after_poses, [k for k in concerned if k is not None])
+        for key in ("all", step.type):
+            self.still[key].add(err, copy, mask)
 
     def as_dict(self) -> dict:
         return {
             "acted": {k: t.as_dict() for k, t in self.acted.items()},
             "side": {k: t.as_dict() for k, t in self.side.items()},
             "kinds": {k: t.as_dict() for k, t in self.kinds.items()},
+            "still": {k: t.as_dict() for k, t in self.still.items()},
         }
 
 
@@ -141,4 +163,11 @@ def format_foresight(result: dict) -> str:
         name = "acted-on object" if who == "acted" else "side effects"
         lines.append(f"{name:24s} " + " ".join(f"{cell(result[who][g]):>12s}" for g in groups))
     lines.append("by kind: " + ", ".join(f"{k} {cell(t)}" for k, t in result["kinds"].items()))
+    if "still" in result:  # absent in results written before it was measured
+
+        def error(t: dict) -> str:
+            return "-" if t["error"] is None else f"{1000 * t['error']:.2f}"
+
+        name = "still objects, error x1000"
+        lines.append(f"{name:24s} " + " ".join(f"{error(result['still'][g]):>12s}" for g in groups))
     return "\n".join(lines)

@@ -168,9 +168,8 @@ def train(
         position_noise=config.position_noise,
         angle_noise=config.angle_noise,
     )
-    train_set = PredictionData(
-        data, "train", config.max_steps, augment, seed=stream, effect_masks=bool(config.loss_effect)
-    )
+    region = config.effect_region if config.loss_effect else None
+    train_set = PredictionData(data, "train", config.max_steps, augment, seed=stream, effect_masks=region)
     if config.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
         draw = np.random.default_rng(config.seed).integers(len(train_set), size=len(train_set))
         train_set.indices = [train_set.indices[k] for k in draw]

@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from afford.errors import UserError
+from afford.planning.closed_loop import Loop, closed_loop
 from afford.planning.hybrid import ACCEPT, PROPOSALS, plan_hybrid
 from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel, execute_plan
@@ -40,6 +42,9 @@ class PlannerConfig:
     # The ensemble planner (planning/uncertain.py): a plan scores eq. (5) averaged over the
     # members plus this many standard deviations of it (risk-averse); 0 scores the mean alone.
     risk: float = RISK
+    # Plan, execute the first action, look at the real state, plan again with the steps left
+    # (planning/closed_loop.py); False: the paper's open loop, the whole plan executed blind.
+    closed_loop: bool = False
 
 
 @dataclass
@@ -65,6 +70,7 @@ class Outcome:
     spread: float | None = None  # ensemble only: the members' spread of eq. (5) at the plan's end
     # `execute_perturbed`: the plan's success in each execution from a perturbed start.
     perturbed: list[bool] = field(default_factory=list)
+    loop: Loop | None = None  # closed loop only: each round's plan, prediction and observation
 
     def to_dict(self) -> dict:
         fair = {}
@@ -92,6 +98,16 @@ class Outcome:
             | ({"spread": round(self.spread, 6)} if self.spread is not None else {})
             | (
                 {
+                    "closed_loop": {
+                        "stopped": self.loop.stopped,
+                        "rounds": [s.to_dict() for s in self.loop.steps],
+                    }
+                }
+                if self.loop is not None
+                else {}
+            )
+            | (
+                {
                     "perturbed_executions": len(self.perturbed),
                     "perturbed_success_rate": round(sum(self.perturbed) / len(self.perturbed), 4),
                 }
@@ -108,7 +124,10 @@ def solve(
     (None: the shipped ones)."""
     if planner not in PLANNER_REGISTRY:
         raise ValueError(f"unknown planner {planner!r}; expected one of {PLANNERS}")
-    return PLANNER_REGISTRY[planner](task, scene, config or PlannerConfig(), learned)
+    config = config or PlannerConfig()
+    if config.closed_loop:
+        return _solve_closed_loop(task, planner, scene, config, learned)
+    return PLANNER_REGISTRY[planner](task, scene, config, learned)
 
 
 def _oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
@@ -126,22 +145,34 @@ def _nets(learned):
 
 
 def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    learned = _nets(learned)
     scene.reset(task.scene)
+    result = _learned_search(task, scene, config, _nets(learned), task.max_steps)
+    return _judge(task, "learned", result, scene)
+
+
+def _learned_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
+    """The learned planner's search from what the camera sees now."""
     model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
-    result = search(model, task.goal, task.max_steps, config.search)
+    result = search(model, task.goal, steps, config.search)
     if config.optimise_turns:
         from afford.planning.angles import with_optimised_turns
 
         result = with_optimised_turns(result, model, task.goal)
-    return _judge(task, "learned", result, scene)
+    return result
+
+
+def _ensemble_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
+    model = EnsembleModel(scene.observe(), learned.recognizer, learned.members, config.risk)
+    return search(model, task.goal, steps, config.search)
+
+
+def _oracle_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
+    return search(OracleModel(scene), task.goal, steps, config.search)
 
 
 def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    learned = _nets(learned)
     scene.reset(task.scene)
-    model = EnsembleModel(scene.observe(), learned.recognizer, learned.members, config.risk)
-    result = search(model, task.goal, task.max_steps, config.search)
+    result = _ensemble_search(task, scene, config, _nets(learned), task.max_steps)
     outcome = _judge(task, "ensemble", result, scene)
     outcome.spread = result.nodes[result.best].spread
     return outcome
@@ -189,6 +220,81 @@ def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome
 
 def _hybrid_oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     return _solve_hybrid(task, "hybrid-oracle", lambda start: OracleModel(scene), scene, config)
+
+
+class ClosedLoopError(UserError):
+    """A planner that cannot re-plan from what it sees."""
+
+
+def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    """Plan, execute the first action, observe, plan again (planning/closed_loop.py)."""
+    if planner not in CLOSED_LOOP:
+        raise ClosedLoopError(
+            f"the {planner} planner has no world model to plan again from what it sees; "
+            f"closed loop takes {', '.join(CLOSED_LOOP)}"
+        )
+    learned = _nets(learned) if planner in USES_NETS else None
+    scene.reset(task.scene)
+    plan_from = CLOSED_LOOP[planner](task, scene, config, learned)
+    loop = closed_loop(scene, plan_from, task.max_steps)
+    success = bool(task.success.holds(scene))
+    reason = "" if success else f"the success predicate ({task.success.describe()}) is false after the loop"
+    last = loop.last.loss if loop.last is not None else (loop.steps[-1].search.loss if loop.steps else None)
+    return Outcome(
+        task=task.name,
+        planner=planner,
+        plan=loop.plan,
+        planned=[loop.start] + [s.predicted for s in loop.steps],
+        executed=[loop.start] + [s.observed for s in loop.steps],
+        success=success,
+        nodes=loop.nodes,
+        seconds=loop.seconds,
+        loss=last,
+        reason=reason,
+        steps_executed=[s.executed for s in loop.steps],
+        truncated=any(s.search.truncated for s in loop.steps),
+        loop=loop,
+    )
+
+
+def _searcher(plan):
+    """A closed-loop round for a planner that searches a tree: `plan(task, scene, config,
+    learned, steps_left)` from the scene's current state."""
+
+    def make(task: Task, scene: Scene, config: PlannerConfig, learned):
+        return lambda steps: plan(task, scene, config, learned, steps)
+
+    return make
+
+
+def _hybrid_rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
+    """Closed-loop hybrid: the canonical proposals are made once, from the task's start; each
+    round the world model checks, from the observed state, the rest of every proposal that
+    began with the actions taken so far, and searches when it keeps none."""
+    proposals = plan_symbolic(
+        scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
+    ).plans
+    scene.reset(task.scene)
+    taken: list[Affordance] = []
+
+    def plan_from(steps: int) -> SearchResult:
+        image = scene.observe()
+        model = (
+            OracleModel(scene)
+            if learned is None
+            else LearnedModel(image, learned.recognizer, learned.predictor)
+        )
+        rest = [
+            p[len(taken) :]
+            for p in proposals
+            if tuple(p[: len(taken)]) == tuple(taken) and len(p) > len(taken)
+        ]
+        result = plan_hybrid(model, task.goal, rest, steps, config.search, config.accept).search
+        if result.plan:
+            taken.append(result.plan[0])
+        return result
+
+    return plan_from
 
 
 def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConfig) -> Outcome:
@@ -315,4 +421,13 @@ PLANNER_REGISTRY = {
     "ensemble": _ensemble,  # the learned planner on an ensemble of prediction nets, risk-averse (paper V)
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
+# Each planner that can plan again from an observed state: (task, scene, config, learned nets
+# or None) -> plan_from(steps left) -> SearchResult, for `closed_loop`.
+CLOSED_LOOP = {
+    "oracle": _searcher(_oracle_search),
+    "learned": _searcher(_learned_search),
+    "hybrid": _hybrid_rounds,
+    "hybrid-oracle": _hybrid_rounds,
+    "ensemble": _searcher(_ensemble_search),
+}
 USES_NETS = ("learned", "hybrid", "ensemble")  # the planners that load the trained nets

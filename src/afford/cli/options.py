@@ -52,6 +52,18 @@ def planners(given: str) -> tuple[str, ...]:
     return names
 
 
+def check_closed_loop(args, names: tuple[str, ...]) -> None:
+    """One line, before any planning, when --closed-loop meets a planner that cannot re-plan."""
+    from afford.planning.run import CLOSED_LOOP
+
+    cannot = [n for n in names if n not in CLOSED_LOOP]
+    if getattr(args, "closed_loop", False) and cannot:
+        raise CLIError(
+            f"--closed-loop: the {cannot[0]} planner has no world model to plan again from what it sees; "
+            f"closed loop takes {', '.join(CLOSED_LOOP)}"
+        )
+
+
 def add_search_arguments(parser, max_nodes: bool = True) -> None:
     """How the tree grows: the paper's breadth-first search, or a guided one (paper V)."""
     from afford.planning.run import PlannerConfig
@@ -101,6 +113,13 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         metavar="W",
         help="ensemble planner: a plan scores the members' mean goal loss (eq. 5) plus W standard "
         f"deviations of it over the members: risk-averse (default {PlannerConfig.risk}); 0: the mean alone",
+    )
+    parser.add_argument(
+        "--closed-loop",
+        action="store_true",
+        help="plan, execute the first action, look at the real state, plan again with the steps left, "
+        "until the plan chosen is empty or the steps are spent (every planner but symbolic); without it "
+        "the whole plan is executed blind, as in the paper",
     )
     if max_nodes:
         parser.add_argument(
@@ -155,13 +174,21 @@ def planner_config(args, progress: bool):
     if not 0 < args.accept < 1:
         raise CLIError("--accept must lie between 0 and 1")
     max_nodes = getattr(args, "max_nodes", SearchConfig.max_nodes)
+    time_limit = getattr(args, "plan_time_limit", None)
+    if time_limit is not None and time_limit <= 0:
+        raise CLIError("--time-limit must be positive (seconds)")
     search = SearchConfig(
         progress=progress,
+        time_limit=time_limit,
         max_nodes=max_nodes or None,
         strategy=args.search,
         beam_width=args.beam_width,
         budget=args.budget,
     )
     return PlannerConfig(
-        search=search, accept=args.accept, optimise_turns=args.optimise_turns, risk=args.risk
+        search=search,
+        accept=args.accept,
+        optimise_turns=args.optimise_turns,
+        risk=args.risk,
+        closed_loop=args.closed_loop,
     )

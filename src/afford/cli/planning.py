@@ -14,6 +14,7 @@ from afford.cli.options import (
     add_perturb_arguments,
     add_search_arguments,
     add_weights_argument,
+    check_closed_loop,
     load_nets,
     planner_config,
 )
@@ -33,13 +34,15 @@ def cmd_plan(args) -> int:
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
 
+    check_closed_loop(args, (args.planner,))
     scene = Scene()
     task = load_task(args.task, scene)
     perturbation = perturbation_of(args)
     learned = load_nets(args.weights) if args.planner in USES_NETS else None
-    outcome = solve(task, args.planner, scene, planner_config(args, progress=not args.json), learned)
+    config = planner_config(args, progress=not args.json)
+    outcome = solve(task, args.planner, scene, config, learned)
     if perturbation is not None:
-        execute_perturbed(outcome, task, scene, perturbation, args.executions)
+        execute_perturbed(outcome, task, scene, perturbation, args.executions, config=config, learned=learned)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     picture = out / f"{task.name}-{args.planner}.png"
@@ -76,6 +79,7 @@ def cmd_bench_tasks(args) -> int:
     if not files:
         raise CLIError(f"{args.tasks}: no task files (*.json) there")
     planners = planner_names(args.planner)
+    check_closed_loop(args, planners)
     perturbation = perturbation_of(args)
     learned = load_nets(args.weights) if any(p in USES_NETS for p in planners) else None
     config = planner_config(args, progress=False)
@@ -90,7 +94,9 @@ def cmd_bench_tasks(args) -> int:
                 print(f"{task.name} ...", end="", flush=True)
             o = solve(task, planner, scene, config, learned)
             if perturbation is not None:
-                execute_perturbed(o, task, scene, perturbation, args.executions)
+                execute_perturbed(
+                    o, task, scene, perturbation, args.executions, config=config, learned=learned
+                )
             if args.out:
                 plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
             rows.append(o.to_dict())
@@ -140,6 +146,7 @@ def cmd_bench_random(args) -> int:
     if not 1 <= args.min_steps <= args.max_steps:
         raise CLIError("--min-steps must be at least 1 and at most --max-steps")
     planners = planner_names(args.planner)
+    check_closed_loop(args, planners)
     if any(p in USES_NETS for p in planners):
         load_nets(args.weights)  # a missing weights folder is one line here, not a worker's traceback
     threads = max(1, (os.cpu_count() or 1) // args.workers)
@@ -167,6 +174,7 @@ def cmd_bench_random(args) -> int:
             "min_steps": args.min_steps,
             "max_steps": args.max_steps,
             "search": args.search,
+            "closed_loop": args.closed_loop,
             "summary": summary,
         }
         out.write_text(json.dumps(record | {"tasks": rows}, indent=2) + "\n")
@@ -241,6 +249,14 @@ def add_parsers(sub) -> None:
     pl.add_argument("--json", action="store_true", help="print the record as JSON")
     add_perturb_arguments(pl)
     add_weights_argument(pl, detail=True)
+    pl.add_argument(
+        "--time-limit",
+        type=float,
+        dest="plan_time_limit",
+        metavar="SECONDS",
+        help="each tree stops growing after this long and the plan is chosen from the states grown "
+        "(default: no limit)",
+    )
     add_search_arguments(pl)
     pl.set_defaults(func=cmd_plan)
 
@@ -258,6 +274,14 @@ def add_parsers(sub) -> None:
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")
     add_perturb_arguments(bt)
+    bt.add_argument(
+        "--time-limit",
+        type=float,
+        dest="plan_time_limit",
+        metavar="SECONDS",
+        help="each tree stops growing after this long and the plan is chosen from the states grown "
+        "(default: no limit)",
+    )
     add_search_arguments(bt)
     bt.set_defaults(func=cmd_bench_tasks)
 

@@ -7,6 +7,7 @@ planned states (for pictures), the executed ones, and why a failure failed.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -22,7 +23,7 @@ from afford.planning.tree import SearchConfig, SearchResult
 from afford.planning.uncertain import RISK, EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
-from afford.sim.perturb import Perturbation, piles
+from afford.sim.perturb import Perturbation, piles, reset_perturbed
 from afford.sim.scene import Scene
 
 DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
@@ -179,10 +180,28 @@ def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outco
 
 
 def execute_perturbed(
-    outcome: Outcome, task: Task, scene: Scene, perturbation: Perturbation, executions: int, seed: int = 0
+    outcome: Outcome,
+    task: Task,
+    scene: Scene,
+    perturbation: Perturbation,
+    executions: int,
+    seed: int = 0,
+    config: PlannerConfig | None = None,
+    learned=None,
 ) -> list[bool]:
     """`perturbed_successes` of the outcome's plan, recorded on the outcome, and returned.
-    Planners plan on the task's start; the world then differs."""
+    Planners plan on the task's start; the world then differs. With `config.closed_loop` the
+    outcome's planner instead runs its loop from each perturbed start, seeing the world as it
+    is after every step."""
+    if config is not None and config.closed_loop:
+        base = piles(scene, task.scene)
+        nets = _nets(learned) if outcome.planner in USES_NETS else None
+        outcome.perturbed = []
+        for k in range(executions):
+            draw = np.random.default_rng([seed, k])  # the same draws as the open-loop executions
+            start = partial(reset_perturbed, scene, task.scene, perturbation, draw, base)
+            outcome.perturbed.append(_closed_loop_run(task, outcome.planner, scene, config, nets, start)[1])
+        return outcome.perturbed
     outcome.perturbed = perturbed_successes(outcome.plan or (), task, scene, perturbation, executions, seed)
     return outcome.perturbed
 
@@ -234,10 +253,7 @@ def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerCo
             f"closed loop takes {', '.join(CLOSED_LOOP)}"
         )
     learned = _nets(learned) if planner in USES_NETS else None
-    scene.reset(task.scene)
-    plan_from = CLOSED_LOOP[planner](task, scene, config, learned)
-    loop = closed_loop(scene, plan_from, task.max_steps)
-    success = bool(task.success.holds(scene))
+    loop, success = _closed_loop_run(task, planner, scene, config, learned, lambda: scene.reset(task.scene))
     reason = "" if success else f"the success predicate ({task.success.describe()}) is false after the loop"
     last = loop.last.loss if loop.last is not None else (loop.steps[-1].search.loss if loop.steps else None)
     return Outcome(
@@ -257,6 +273,17 @@ def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerCo
     )
 
 
+def _closed_loop_run(
+    task: Task, planner: str, scene: Scene, config: PlannerConfig, learned, start
+) -> tuple[Loop, bool]:
+    """One loop from the state `start()` puts the scene in: the loop, and whether the task's
+    check holds after it."""
+    plan_from = CLOSED_LOOP[planner](task, scene, config, learned)
+    start()
+    loop = closed_loop(scene, plan_from, task.max_steps)
+    return loop, bool(task.success.holds(scene))
+
+
 def _searcher(plan):
     """A closed-loop round for a planner that searches a tree: `plan(task, scene, config,
     learned, steps_left)` from the scene's current state."""
@@ -274,7 +301,6 @@ def _hybrid_rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
     proposals = plan_symbolic(
         scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
     ).plans
-    scene.reset(task.scene)
     taken: list[Affordance] = []
 
     def plan_from(steps: int) -> SearchResult:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
-from afford.viz.draw import SCALE, depth_pil, draw_affordances, hstack, label, to_pil
+from afford.viz.draw import SCALE, depth_pil, draw_affordances, hstack, label, to_pil, vstack
 
 
 def goal_panel(patch: np.ndarray, size: int, negative: bool, scale: int = SCALE) -> Image.Image:
@@ -29,8 +29,44 @@ def goal_panel(patch: np.ndarray, size: int, negative: bool, scale: int = SCALE)
     return panel
 
 
+def _action_text(a) -> str:
+    return a.type + (f" {a.turn:+g}" if a.turn else "")
+
+
+def loop_picture(outcome, goal, path: str | Path) -> None:
+    """A closed-loop run (planning/closed_loop.py): above, the state each round's plan foresaw
+    after its first action; below, the state observed, with the next round's action drawn."""
+    loop = outcome.loop
+    size = loop.start.shape[0]
+    kind = "NOT " if goal.negative else ""
+    top = [label(goal_panel(goal.patch, size, goal.negative), f"goal: {kind}{goal.channels.upper()}")]
+    first = to_pil(loop.start)
+    if loop.steps:
+        first = draw_affordances(first, [loop.steps[0].action])
+    bottom = [
+        label(first, "start" + (f": {_action_text(loop.steps[0].action)}" if loop.steps else " (no plan)"))
+    ]
+    for i, step in enumerate(loop.steps, 1):
+        top.append(label(to_pil(step.predicted), f"foreseen {i} (gap {step.gap:.5f})"))
+        seen = to_pil(step.observed)
+        if i < len(loop.steps):
+            nxt = loop.steps[i].action
+            seen = draw_affordances(seen, [nxt])
+            text = f"observed {i}: {_action_text(nxt)}"
+        else:
+            text = f"observed {i}: {'solved' if outcome.success else 'FAILED'}"
+        bottom.append(label(seen, text))
+    picture = vstack([hstack(top), hstack(bottom)])
+    stopped = "the plan came back empty" if loop.stopped == "goal" else "the steps were spent"
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    label(picture, f"{outcome.task} | {outcome.planner}, closed loop: {stopped}").save(path)
+
+
 def plan_strip(outcome, goal, path: str | Path) -> None:
-    """Write the Fig. 8-style strip for a planning `Outcome`."""
+    """Write the Fig. 8-style strip for a planning `Outcome` (a closed-loop one: `loop_picture`)."""
+    if getattr(outcome, "loop", None) is not None:
+        loop_picture(outcome, goal, path)
+        return
     size = outcome.planned[0].shape[0]
     kind = "NOT " if goal.negative else ""
     panels = [label(goal_panel(goal.patch, size, goal.negative), f"goal: {kind}{goal.channels.upper()}")]

@@ -48,6 +48,10 @@ def cmd_plan(args) -> int:
     picture = out / f"{task.name}-{args.planner}.png"
     plan_strip(outcome, task.goal, picture)
     record = outcome.to_dict() | {"picture": str(picture)}
+    if args.report:
+        from afford.viz.report import write_report
+
+        record["report"] = str(write_report(outcome, task.goal, args.report))
     (out / f"{task.name}-{args.planner}.json").write_text(json.dumps(record, indent=2) + "\n")
     if args.json:
         print(json.dumps(record, indent=2))
@@ -64,6 +68,8 @@ def cmd_plan(args) -> int:
                 f"succeed ({rate:.0%})"
             )
         print(f"  picture: {picture}")
+        if args.report:
+            print(f"  report: {args.report}")
     scene.close()
     return 0 if outcome.success else 1
 
@@ -247,6 +253,13 @@ def add_parsers(sub) -> None:
     )
     pl.add_argument("--out", default="out/plan", metavar="DIR", help="where the picture and record go")
     pl.add_argument("--json", action="store_true", help="print the record as JSON")
+    pl.add_argument(
+        "--report",
+        metavar="FILE.html",
+        help="also write one self-contained HTML page of the search tree (paper Fig. 5): every state's "
+        "image with the affordances recognised on it and its eq. (5) loss, the chosen path marked; "
+        "closed loop: one tree per round",
+    )
     add_perturb_arguments(pl)
     add_weights_argument(pl, detail=True)
     pl.add_argument(

@@ -72,6 +72,7 @@ class Outcome:
     # `execute_perturbed`: the plan's success in each execution from a perturbed start.
     perturbed: list[bool] = field(default_factory=list)
     loop: Loop | None = None  # closed loop only: each round's plan, prediction and observation
+    search: SearchResult | None = None  # the tree the plan was chosen from (reports; not in to_dict)
 
     def to_dict(self) -> dict:
         fair = {}
@@ -367,6 +368,7 @@ def _judge(task: Task, name: str, result: SearchResult, scene: Scene, source: st
         steps_executed=ex.executed,
         truncated=result.truncated,
         source=source,
+        search=result,
     )
 
 

@@ -47,6 +47,8 @@ class Node:
     # An ensemble's world model (planning/uncertain.py): the spread of eq. (5) over its
     # members, which `loss` then counts by the planner's risk weight. 0 for one model.
     spread: float = 0.0
+    # What recognition found on this state (None: not expanded), for reports of the tree.
+    recognised: list[Detection] | None = None
 
     @property
     def depth(self) -> int:
@@ -211,6 +213,7 @@ class Growth:
                     break
                 batch = frontier[b : b + bs]
                 for i, rec in zip(batch, self.model.recognise([self.nodes[i] for i in batch]), strict=True):
+                    self.nodes[i].recognised = rec
                     children.extend((i, a) for a in edges(rec, self.config.merge_radius))
                 self.expanded += len(batch)
                 bar.update(len(batch))

@@ -26,7 +26,9 @@ class Reach(WorldModel):
 
     def recognise(self, nodes):
         grasps = (range(n.state - 2, n.state + 3) for n in nodes)
-        return [[Detection(Affordance("grasp", (float(q), 0.0, 0.0), 0.0, False)) for q in qs] for qs in grasps]
+        return [
+            [Detection(Affordance("grasp", (float(q), 0.0, 0.0), 0.0, False)) for q in qs] for qs in grasps
+        ]
 
     def predict(self, parents, actions):
         return [(bar(int(a.position[0])), int(a.position[0])) for a in actions]

@@ -39,7 +39,9 @@ class Nodes(HTMLParser):
 
 
 def outcome_of(result, **extra):
-    return Outcome("toy", "learned", result.plan, [bar(0)], [bar(0)], True, len(result.nodes) - 1, 0.1, **extra)
+    return Outcome(
+        "toy", "learned", result.plan, [bar(0)], [bar(0)], True, len(result.nodes) - 1, 0.1, **extra
+    )
 
 
 def test_the_report_holds_every_state_grown_with_its_image_and_marks_the_chosen_path():
@@ -50,14 +52,19 @@ def test_the_report_holds_every_state_grown_with_its_image_and_marks_the_chosen_
     assert sorted(n["index"] for n in parser.nodes) == list(range(len(result.nodes)))
     assert all(n["image"] for n in parser.nodes)
     chosen = {n["index"] for n in parser.nodes if n["chosen"]}
-    assert chosen == {0, *(i for i, n in enumerate(result.nodes) if n.plan and n.plan == result.plan[: n.depth])}
+    assert chosen == {
+        0,
+        *(i for i, n in enumerate(result.nodes) if n.plan and n.plan == result.plan[: n.depth]),
+    }
     assert parser.scripts == 1
 
 
 def test_a_closed_loop_report_has_one_tree_per_round():
     goal = Goal(bar(4))
     world = SlipWorld()
-    loop = closed_loop(world, lambda steps: search(Reach(world.p), goal, steps, SearchConfig(progress=False)), 5)
+    loop = closed_loop(
+        world, lambda steps: search(Reach(world.p), goal, steps, SearchConfig(progress=False)), 5
+    )
     html = report_html(outcome_of(loop.last, loop=loop), goal)
     assert html.count('<div class="tree">') == len(loop.steps) + 1
     assert html.count('<div class="observed">') == len(loop.steps)

@@ -128,3 +128,19 @@ def test_a_tree_past_its_node_limit_is_refused_before_it_is_grown():
     with pytest.raises(TreeTooLarge, match=r"depth 2 would add .* states .*limit"):
         search(world, Goal(picture(4)), 3, SearchConfig(progress=False, max_nodes=limit))
     assert world.recognised <= 1 + full.per_depth[1]  # depth 2 was never predicted
+
+
+def test_a_deep_tree_is_refused_after_two_depths_with_its_estimate():
+    from afford.planning.strategies import whole_tree
+    from afford.planning.tree import TreeTooLarge
+
+    assert whole_tree([1, 5, 25], 4) == (1 + 5 + 25 + 125 + 625, 5.0)
+    world = LineWorld()
+    three = search(world, Goal(picture(4)), 3, SearchConfig(progress=False))
+    estimate, _ = whole_tree(three.per_depth[:3], 8)
+    world = LineWorld()
+    with pytest.raises(TreeTooLarge, match=r"a tree of 8 steps would hold about [\d,]+ states .*depth 2"):
+        search(world, Goal(picture(4)), 8, SearchConfig(progress=False, max_nodes=int(estimate) - 1))
+    assert world.recognised <= sum(three.per_depth[:2])  # refused once depth 2 was grown
+    fits = search(LineWorld(), Goal(picture(4)), 3, SearchConfig(progress=False, max_nodes=len(three.nodes)))
+    assert len(fits.nodes) == len(three.nodes)  # a tree that fits is grown whole

@@ -19,6 +19,7 @@ Every strategy chooses the plan alike: eq. (4) over every state grown (`tree.cho
 from __future__ import annotations
 
 import heapq
+import time
 
 from tqdm import tqdm
 
@@ -44,7 +45,33 @@ def breadth_first(tree: Growth, max_steps: int) -> SearchResult:
         per_depth.append(len(frontier))
         if not frontier or tree.truncated:
             break
+        if config.max_nodes is not None:
+            _refuse_whole(tree, per_depth, max_steps, config.max_nodes)
     return tree.result(per_depth)
+
+
+def whole_tree(per_depth: list[int], max_steps: int) -> tuple[float, float]:
+    """(states, branching): the size of the whole tree of `max_steps`, extrapolated from the
+    depths grown (root first) by the last depth's branching factor."""
+    branching = per_depth[-1] / max(per_depth[-2], 1)
+    rest = sum(per_depth[-1] * branching**j for j in range(1, max_steps - len(per_depth) + 2))
+    return sum(per_depth) + rest, branching
+
+
+def _refuse_whole(tree: Growth, per_depth: list[int], max_steps: int, limit: int) -> None:
+    """From depth 2 on, refuse at once a tree whose deeper levels would pass the limit, so a
+    task of too many steps is told so in seconds, not after growing depth after depth."""
+    grown = len(per_depth) - 1
+    if grown < 2 or grown >= max_steps:
+        return
+    total, branching = whole_tree(per_depth, max_steps)
+    if total > limit:
+        seconds = time.perf_counter() - tree.start
+        raise TreeTooLarge(
+            f"a tree of {max_steps} steps would hold about {total:,.0f} states (each state at depth {grown} "
+            f"led to {branching:.1f}; {sum(per_depth):,} grown in {seconds:.0f} s), past the limit of "
+            f"{limit:,}: plan fewer steps, search with --search beam or best-first, or raise --max-nodes"
+        )
 
 
 def _refuse(depth: int, have: int, adds: float, limit: int, about: str) -> None:

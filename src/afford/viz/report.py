@@ -36,11 +36,15 @@ summary img { width: 40px; height: 40px; vertical-align: middle; margin-right: 6
 """
 
 SCRIPT = """
-document.querySelectorAll('summary[data-node]').forEach(s => s.addEventListener('click', () => {
+function show(s) {
   const v = document.getElementById('view');
   v.querySelector('img').src = s.querySelector('img').src;
   v.querySelector('p').textContent = s.dataset.info;
-}));
+}
+document.querySelectorAll('summary[data-node]').forEach(s => s.addEventListener('click', () => show(s)));
+// page.html#state-K opens with state K of the first tree shown (links, screenshots)
+const asked = location.hash.match(/^#state-(\\d+)$/);
+if (asked) { const s = document.querySelector(`summary[data-node="${asked[1]}"]`); if (s) show(s); }
 """
 
 

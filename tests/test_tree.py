@@ -142,5 +142,7 @@ def test_a_deep_tree_is_refused_after_two_depths_with_its_estimate():
     with pytest.raises(TreeTooLarge, match=r"a tree of 8 steps would hold about [\d,]+ states .*depth 2"):
         search(world, Goal(picture(4)), 8, SearchConfig(progress=False, max_nodes=int(estimate / 2) - 1))
     assert world.recognised <= sum(three.per_depth[:2])  # refused once depth 2 was grown
-    fits = search(LineWorld(), Goal(picture(4)), 3, SearchConfig(progress=False, max_nodes=len(three.nodes) + 2))
+    fits = search(
+        LineWorld(), Goal(picture(4)), 3, SearchConfig(progress=False, max_nodes=len(three.nodes) + 2)
+    )
     assert len(fits.nodes) == len(three.nodes)  # a tree that fits is grown whole

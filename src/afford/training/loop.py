@@ -189,7 +189,19 @@ def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
         signal.signal(signal.SIGTERM, previous)
         bar.close()
         this.log.close()
+        stop_workers(loop.batches)
     return state
+
+
+def stop_workers(batches: Iterable) -> None:
+    """End a DataLoader's persistent workers now. It keeps them until it is deleted, which at
+    interpreter exit comes after multiprocessing's own clean-up; that terminates and waits on
+    them, and workers deaf to SIGTERM (data/torch_data.worker_init) would keep the finished
+    run's process waiting for ever."""
+    iterator = getattr(batches, "_iterator", None)
+    if iterator is not None and hasattr(iterator, "_shutdown_workers"):
+        iterator._shutdown_workers()
+        batches._iterator = None
 
 
 def _interrupt(signum, frame) -> None:

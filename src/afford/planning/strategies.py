@@ -45,7 +45,7 @@ def breadth_first(tree: Growth, max_steps: int) -> SearchResult:
         per_depth.append(len(frontier))
         if not frontier or tree.truncated:
             break
-        if config.max_nodes is not None:
+        if config.max_nodes is not None and config.time_limit is None:  # a time limit bounds it already
             _refuse_whole(tree, per_depth, max_steps, config.max_nodes)
     return tree.result(per_depth)
 

@@ -197,3 +197,19 @@ def test_bench_random_gives_the_same_tasks_and_results_on_two_workers():
     two = list(run(spec, 3, first_seed=0, workers=2))
     assert [r["seed"] for r in one] == [r["seed"] for r in two]
     assert [r["symbolic"]["score"] for r in one] == [r["symbolic"]["score"] for r in two]
+
+
+def test_closed_loop_oracle_plans_acts_and_stops_on_an_empty_plan(scene):
+    task = task_from_json(GOOD, scene=scene)
+    config = PlannerConfig(search=SearchConfig(progress=False), closed_loop=True)
+    o = solve(task, "oracle", scene, config)
+    assert o.success and [a.type for a in o.plan] == ["grasp", "place"]
+    rounds = o.to_dict()["closed_loop"]["rounds"]
+    assert [r["action"]["type"] for r in rounds] == ["grasp", "place"]
+    assert all(r["gap"] < 1e-6 for r in rounds)  # the simulator foresees itself
+    assert len(o.planned) == len(o.executed) == 3 and o.loop.stopped == "budget"
+
+
+def test_closed_loop_refuses_the_symbolic_planner_in_one_line():
+    r = afford("plan", "--task", str(PAPER / "10-hide.json"), "--planner", "symbolic", "--closed-loop")
+    assert r.returncode == 2 and "no world model" in r.stderr and "Traceback" not in r.stderr

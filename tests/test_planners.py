@@ -103,6 +103,20 @@ def test_bench_tasks_cli_tables_a_folder(tmp_path, capsys):
     assert empty.returncode == 2 and "no task files" in empty.stderr
 
 
+def test_bench_tasks_counts_each_folder_apart(tmp_path, capsys):
+    for name, steps in (("a", 2), ("b", 1)):  # one step cannot both grasp and place
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "toy.json").write_text(json.dumps({**GOOD, "max_steps": steps}))
+    folders = f"{tmp_path / 'a'},{tmp_path / 'b'}"
+    r = here(capsys, "bench", "tasks", "--planner", "oracle", "--tasks", folders, "--json")
+    assert r.returncode == 0, r.stderr
+    counts = json.loads(r.stdout)["oracle"]["folders"]
+    assert counts == {
+        str(tmp_path / "a"): {"solved": 1, "tasks": 1},
+        str(tmp_path / "b"): {"solved": 0, "tasks": 1},
+    }
+
+
 def test_random_tasks_are_not_solved_by_doing_nothing(scene):
     from afford.planning.oracle import execute_plan
     from afford.planning.random_tasks import random_task

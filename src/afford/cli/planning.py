@@ -81,9 +81,13 @@ def cmd_bench_tasks(args) -> int:
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
 
-    files = sorted(Path(args.tasks).glob("*.json"))
-    if not files:
-        raise CLIError(f"{args.tasks}: no task files (*.json) there")
+    folders = [f.strip() for f in args.tasks.split(",") if f.strip()]
+    files = []
+    for folder in folders:
+        found = sorted(Path(folder).glob("*.json"))
+        if not found:
+            raise CLIError(f"{folder}: no task files (*.json) there")
+        files += [(folder, f) for f in found]
     planners = planner_names(args.planner)
     check_closed_loop(args, planners)
     perturbation = perturbation_of(args)
@@ -93,7 +97,7 @@ def cmd_bench_tasks(args) -> int:
     report = {}
     for planner in planners:
         rows = []
-        for f in files:
+        for folder, f in files:
             task = load_task(f, scene)
             live = not args.json and sys.stdout.isatty()
             if live:
@@ -105,7 +109,7 @@ def cmd_bench_tasks(args) -> int:
                 )
             if args.out:
                 plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
-            rows.append(o.to_dict())
+            rows.append(o.to_dict() | {"folder": folder})
             if not args.json:
                 back = "\r" if live else ""
                 print(f"{back}{task.name:32s} {_outcome_line(o)}  [{o.nodes} nodes, {o.seconds:.1f} s]")
@@ -115,6 +119,14 @@ def cmd_bench_tasks(args) -> int:
                     print(f"{'':32s} perturbed: {sum(o.perturbed)}/{len(o.perturbed)} executions succeed")
         solved = sum(r["solved"] for r in rows)
         report[planner] = {"solved": solved, "tasks": rows}
+        if len(folders) > 1:  # each set beside the others: the paper's tasks, variants of them
+            report[planner]["folders"] = {
+                d: {
+                    "solved": sum(r["solved"] for r in rows if r["folder"] == d),
+                    "tasks": sum(r["folder"] == d for r in rows),
+                }
+                for d in folders
+            }
         if perturbation is not None:
             rates = [r["perturbed_success_rate"] for r in rows]
             report[planner]["perturbed_success_rate"] = round(sum(rates) / len(rates), 4)
@@ -129,6 +141,8 @@ def cmd_bench_tasks(args) -> int:
         if not args.json:
             fair = f" (over its equally short plans: {sum(expected):.2f} expected)" if expected else ""
             print(f"{planner}: {solved}/{len(rows)} tasks solved{fair}")
+            for d, c in report[planner].get("folders", {}).items():
+                print(f"  {d}: {c['solved']}/{c['tasks']}")
     if args.json:
         print(json.dumps(report, indent=2))
     scene.close()
@@ -283,7 +297,13 @@ def add_parsers(sub) -> None:
     )
     bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
     add_weights_argument(bt)
-    bt.add_argument("--tasks", default="tasks/paper", metavar="DIR")
+    bt.add_argument(
+        "--tasks",
+        default="tasks/paper",
+        metavar="DIR[,DIR]",
+        help="folder of task files, or several as a comma list, each counted apart (e.g. "
+        "tasks/paper,tasks/variants: the paper's tasks beside variants of them; default tasks/paper)",
+    )
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")
     add_perturb_arguments(bt)

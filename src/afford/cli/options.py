@@ -52,6 +52,18 @@ def planners(given: str) -> tuple[str, ...]:
     return names
 
 
+def add_time_limit_argument(parser) -> None:
+    """--time-limit for one plan's trees (`afford bench random` has its own, per task)."""
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        dest="plan_time_limit",
+        metavar="SECONDS",
+        help="each tree stops growing after this long and the plan is chosen from the states grown "
+        "(default: no limit)",
+    )
+
+
 def check_closed_loop(args, names: tuple[str, ...]) -> None:
     """One line, before any planning, when --closed-loop meets a planner that cannot re-plan."""
     from afford.planning.run import CLOSED_LOOP

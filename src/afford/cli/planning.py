@@ -13,6 +13,7 @@ from afford.cli.options import (
     PLANNERS_HELP,
     add_perturb_arguments,
     add_search_arguments,
+    add_time_limit_argument,
     add_weights_argument,
     check_closed_loop,
     load_nets,
@@ -276,14 +277,7 @@ def add_parsers(sub) -> None:
     )
     add_perturb_arguments(pl)
     add_weights_argument(pl, detail=True)
-    pl.add_argument(
-        "--time-limit",
-        type=float,
-        dest="plan_time_limit",
-        metavar="SECONDS",
-        help="each tree stops growing after this long and the plan is chosen from the states grown "
-        "(default: no limit)",
-    )
+    add_time_limit_argument(pl)
     add_search_arguments(pl)
     pl.set_defaults(func=cmd_plan)
 
@@ -307,14 +301,7 @@ def add_parsers(sub) -> None:
     bt.add_argument("--out", metavar="DIR", help="also write each plan's picture here")
     bt.add_argument("--json", action="store_true")
     add_perturb_arguments(bt)
-    bt.add_argument(
-        "--time-limit",
-        type=float,
-        dest="plan_time_limit",
-        metavar="SECONDS",
-        help="each tree stops growing after this long and the plan is chosen from the states grown "
-        "(default: no limit)",
-    )
+    add_time_limit_argument(bt)
     add_search_arguments(bt)
     bt.set_defaults(func=cmd_bench_tasks)
 

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 from afford.sim.affordances import TYPES
 from afford.sim.camera import SIZE
 
+CHANGED = 0.02  # ours: a ground-truth pixel changed when a channel moved by more than this
+
 
 @dataclass(frozen=True)
 class PredictionConfig:
@@ -84,6 +86,14 @@ class PredictionConfig:
     # the side effects that happened (weighs only one way: the net learns to draw effects where
     # none follow); "objects", every object's pixels in every step, effect or not.
     effect_region: str = "effects"
+    # Outcomes D draws per step (spatial only): 1, one image, as the paper; K > 1, K candidate
+    # images and a head that scores them, trained winner-takes-all: the candidate nearest the
+    # truth takes the loss and is carried to the next step, the head learns which one won.
+    # One image can only hedge between "the ball stays" and "the ball falls" (a blur that
+    # matches neither); K can draw both, sharp, and say which is likely.
+    hypotheses: int = 1
+    loss_choice: float = 0.1  # the choice head's cross-entropy against the winner
+    loss_others: float = 0.05  # every candidate's absolute error, so that none stops learning
 
     @property
     def latent_size(self) -> int:

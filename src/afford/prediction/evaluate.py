@@ -20,13 +20,12 @@ from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
 from afford.images import to_chw, to_hwc
 from afford.prediction import foresight
-from afford.prediction.config import PredictionConfig
+from afford.prediction.config import CHANGED, PredictionConfig
 from afford.prediction.model import PredictionNet
 from afford.sim.affordances import TYPES
 from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "prediction"
-CHANGED = 0.02  # ours: a ground-truth pixel changed when a channel moved by more than this
 TRAIN_SEQUENCES = 500
 BATCH = 32
 STEPS = 4

@@ -15,10 +15,12 @@ action vector, eq. (2) and (3), and the rollout.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 from torch import nn
 
-from afford.prediction.config import PredictionConfig
+from afford.prediction.config import CHANGED, PredictionConfig
 from afford.prediction.dense import DenseDecoder, DenseEncoder, DenseP
 from afford.prediction.layers import apply_difference, clamped_tanh, normalise_latent
 from afford.prediction.spatial import SpatialDecoder, SpatialEncoder, SpatialP
@@ -42,6 +44,37 @@ def affordance_pixel(images: torch.Tensor, positions: torch.Tensor) -> torch.Ten
     return images[torch.arange(len(images), device=images.device), :, row, col]
 
 
+@dataclass
+class Hypotheses:
+    """A step's K candidate outcomes (config.hypotheses > 1): the images (B, K, C, H, W), the
+    choice head's logits (B, K), and the one picked (B,): the winner, nearest the truth, in
+    training; the most likely one otherwise."""
+
+    candidates: torch.Tensor
+    logits: torch.Tensor
+    picked: torch.Tensor
+
+
+# Weight of what a candidate would draw (its new values, before eq. (3)'s mask) in choosing the
+# winner: where every candidate's mask is still shut their outputs tie, and the values break
+# the tie by what each would draw once open.
+VALUES_TIE_BREAK = 0.1
+
+
+@torch.no_grad()
+def winners(candidates: torch.Tensor, differences: torch.Tensor, image: torch.Tensor, truth: torch.Tensor):
+    """(B,) the candidate nearest the truth where the truth changed (by more than CHANGED from
+    the step's input): the hypotheses are alternatives of what changes, and over the unchanged
+    rest of the image, where every candidate copies the input alike, an outcome drawn right
+    would be outvoted by noise. Over the whole image where nothing changed. `differences`
+    (B, K, C+1, H, W): each candidate's values and mask."""
+    changed = ((truth - image).abs().amax(1) > CHANGED).float()[:, None]  # (B, 1, H, W)
+    changed = torch.where(changed.sum((2, 3), keepdim=True) > 0, changed, torch.ones_like(changed))
+    errors = (candidates - truth[:, None]).abs().mean(2)  # (B, K, H, W)
+    errors = errors + VALUES_TIE_BREAK * (differences[:, :, :-1] - truth[:, None]).abs().mean(2)
+    return ((errors * changed).sum((2, 3)) / changed.sum((2, 3))).argmin(1)
+
+
 class PredictionNet(nn.Module):
     def __init__(self, config: PredictionConfig):
         super().__init__()
@@ -50,6 +83,8 @@ class PredictionNet(nn.Module):
                 f"unknown prediction architecture {config.architecture!r}; "
                 f"expected one of {sorted(ARCHITECTURES)}"
             )
+        if config.hypotheses < 1 or (config.hypotheses > 1 and config.architecture != "spatial"):
+            raise ValueError("hypotheses: 1, or more with the spatial architecture")
         encoder, p_module, decoder = ARCHITECTURES[config.architecture]
         self.config = config
         self.encoder = encoder(config)
@@ -82,6 +117,12 @@ class PredictionNet(nn.Module):
     def step_with_difference(self, latent, memory, image, rows):
         """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
         new values and, last, its mask."""
+        return self.step_hypotheses(latent, memory, image, rows)[:4]
+
+    def step_hypotheses(self, latent, memory, image, rows, truth: torch.Tensor | None = None):
+        """`step_with_difference` and, with K > 1 hypotheses, the `Hypotheses` (else None):
+        the candidate carried on is the one nearest `truth` where it is given (training's
+        winner-takes-all), else the one the choice head finds most likely."""
         vector = self.action_vector(rows, image)
         pixel = world_to_pixel(rows[:, Col.POSITION])
         types = rows[:, Col.TYPE].long()
@@ -98,8 +139,43 @@ class PredictionNet(nn.Module):
             memory_out = memory_out.index_copy(0, idx, m)
         next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
         difference = self.decoder(dc, image)
-        next_image = apply_difference(image, difference)  # eq. (3)
-        return next_latent, memory_out, next_image, difference
+        k = self.config.hypotheses
+        if k == 1:
+            return next_latent, memory_out, apply_difference(image, difference), difference, None  # eq. (3)
+        b = len(image)
+        differences = difference.view(b, k, -1, *difference.shape[-2:])
+        candidates = apply_difference(image.repeat_interleave(k, 0), differences.flatten(0, 1))  # eq. (3)
+        candidates = candidates.view(b, k, *image.shape[1:])
+        logits = self.decoder.choice_logits(dc)
+        picked = logits.argmax(1) if truth is None else winners(candidates, differences, image, truth)
+        at = torch.arange(b, device=image.device)
+        return (
+            next_latent,
+            memory_out,
+            candidates[at, picked],
+            differences[at, picked],
+            Hypotheses(candidates, logits, picked),
+        )
+
+    def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """Weights of a one-hypothesis net for this one (fine-tuning the shipped net with K
+        hypotheses): D's output repeated for each candidate, each a little apart so that
+        winner-takes-all can tell them apart, and the choice head as initialised (uniform)."""
+        k = self.config.hypotheses
+        own = self.state_dict()
+        if k == 1 or "decoder.choice.weight" in state:
+            return state
+        state = dict(state)
+        for name in ("decoder.out.weight", "decoder.out.bias"):
+            if name in state and state[name].shape[0] * k == own[name].shape[0]:
+                copies = [state[name]] + [
+                    state[name] + 0.01 * state[name].std() * torch.randn_like(state[name])
+                    for _ in range(k - 1)
+                ]
+                state[name] = torch.cat(copies, 0)
+        for name in ("decoder.choice.weight", "decoder.choice.bias"):
+            state[name] = own[name]
+        return state
 
     def step(self, latent, memory, image, rows):
         """One prediction: (c_i, m_i, s_i, a_i) -> (c_{i+1}, m_{i+1}, s_{i+1}).
@@ -117,6 +193,18 @@ class PredictionNet(nn.Module):
         With `steps` (B,), run k stops after steps[k] actions (its later outputs are zeros):
         padded steps of a batch cost nothing.
         """
+        return self.rollout_hypotheses(image, actions, steps)[:2]
+
+    def rollout_hypotheses(
+        self,
+        image: torch.Tensor,
+        actions: torch.Tensor,
+        steps: torch.Tensor | None = None,
+        truth: torch.Tensor | None = None,
+    ) -> tuple:
+        """`rollout_with_differences`, and with K > 1 hypotheses also every step's candidates
+        (B, L, K, C, H, W), logits (B, L, K) and picks (B, L) (else None, None, None); with
+        `truth` (B, L, C, H, W) each step carries on its winner (`step_hypotheses`)."""
         b, length = actions.shape[:2]
         at = image.device
         order = (
@@ -131,28 +219,41 @@ class PredictionNet(nn.Module):
         )
         image = image[order]
         acts = actions[order]
+        truth = None if truth is None else truth[order]
         latent, memory = self.encode(image)
-        states = differences = None
+        states = differences = candidates = logits = picks = None
         for i in range(length):
             n = int(active[i])
             if n == 0:
                 break
-            latent, memory, image, difference = self.step_with_difference(
-                latent[:n], memory[:n], image[:n], acts[:n, i]
+            latent, memory, image, difference, hyp = self.step_hypotheses(
+                latent[:n], memory[:n], image[:n], acts[:n, i], None if truth is None else truth[:n, i]
             )
             if states is None:  # made here: under autocast the outputs may be bfloat16
                 states = image.new_zeros((b, length, *image.shape[1:]))
                 differences = difference.new_zeros((b, length, *difference.shape[1:]))
+                if hyp is not None:
+                    candidates = hyp.candidates.new_zeros((b, length, *hyp.candidates.shape[1:]))
+                    logits = hyp.logits.new_zeros((b, length, hyp.logits.shape[1]))
+                    picks = hyp.picked.new_zeros((b, length))
             states[order[:n], i] = image
             differences[order[:n], i] = difference
-        return states, differences
+            if hyp is not None:
+                candidates[order[:n], i] = hyp.candidates
+                logits[order[:n], i] = hyp.logits
+                picks[order[:n], i] = hyp.picked
+        return states, differences, candidates, logits, picks
 
     def forward(
-        self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Training's forward pass, `rollout_with_differences`: a call through the module, so
-        that DistributedDataParallel sees it."""
-        return self.rollout_with_differences(image, actions, steps)
+        self,
+        image: torch.Tensor,
+        actions: torch.Tensor,
+        steps: torch.Tensor | None = None,
+        truth: torch.Tensor | None = None,
+    ) -> tuple:
+        """Training's forward pass, `rollout_hypotheses`: a call through the module, so that
+        DistributedDataParallel sees it."""
+        return self.rollout_hypotheses(image, actions, steps, truth)
 
     def rollout(
         self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None

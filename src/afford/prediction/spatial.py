@@ -182,10 +182,20 @@ class SpatialDecoder(nn.Module):
         if c.latent_size * 2 ** len(c.decoder_channels) != c.image_size:
             raise ValueError("decoder_channels must upsample the latent grid to half the image size")
         self.full = nn.Sequential(_conv(width + 4 * c.channels, c.full_channels), act())
-        self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1), 1)
+        k = c.hypotheses
+        self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1) * k, 1)
         with torch.no_grad():
-            self.out.bias.view(c.channels + 1, 4)[-1] = MASK_BIAS  # pixel_shuffle: channel-major
+            self.out.bias.view(k, c.channels + 1, 4)[:, -1] = MASK_BIAS  # pixel_shuffle: channel-major
+        if k > 1:  # which candidate is likely, from dc pooled over the grid (mean and max)
+            self.choice = nn.Linear(2 * c.latent_channels, k)
+            nn.init.zeros_(self.choice.weight)
+            nn.init.zeros_(self.choice.bias)
 
     def forward(self, dc: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
+        """(B, K * (C+1), H, W): each candidate's difference image, eq. (3)'s mask last."""
         x = torch.cat([self.up(dc), nn.functional.pixel_unshuffle(image, 2)], 1)
         return clamped_tanh(nn.functional.pixel_shuffle(self.out(self.full(x)), 2))
+
+    def choice_logits(self, dc: torch.Tensor) -> torch.Tensor:
+        """(B, K): how likely each candidate outcome is (softmax), for K > 1."""
+        return self.choice(torch.cat([dc.mean((2, 3)), dc.amax((2, 3))], 1))

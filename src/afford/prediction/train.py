@@ -70,10 +70,13 @@ def sequence_loss(
     `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
     c = getattr(net, "module", net).config
-    with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
-        predicted, differences = net(images[:, 0], actions, steps)
-    predicted, differences = predicted.float(), differences.float()
     truth = images[:, 1:]
+    many = c.hypotheses > 1
+    with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
+        predicted, differences, candidates, logits, picks = net(
+            images[:, 0], actions, steps, truth if many else None
+        )
+    predicted, differences = predicted.float(), differences.float()
     diff = predicted - truth
     err = c.loss_mse * (diff**2).sum(2).mean((-2, -1))  # (B, L)
     if c.loss_l1:
@@ -89,6 +92,11 @@ def sequence_loss(
         on = effects.float()
         squared = (diff**2).sum(2) * on
         err = err + c.loss_effect * squared.sum((-2, -1)) / on.sum((-2, -1)).clamp_min(1.0)
+    if many:  # the terms above are the winner's (winner-takes-all); every candidate learns a little
+        others = (candidates.float() - truth[:, :, None]).abs().sum(3).mean((-2, -1))  # (B, L, K)
+        err = err + c.loss_others * others.mean(-1)
+        choice = nn.functional.cross_entropy(logits.float().flatten(0, 1), picks.flatten(), reduction="none")
+        err = err + c.loss_choice * choice.view_as(err)
     mask = step_mask(steps, actions.shape[1])
     return (err * mask).sum() / mask.sum()
 

@@ -86,6 +86,8 @@ def read_checkpoint(path: str | Path, kind: str) -> tuple[dict[str, torch.Tensor
 def load_model_state(model: nn.Module, tensors: dict[str, torch.Tensor], path: str | Path) -> None:
     """Copy `model.*` tensors into `model`; a different architecture is a CheckpointError."""
     state = {k[len("model.") :]: v for k, v in tensors.items() if k.startswith("model.")}
+    if hasattr(model, "adapt_state"):  # e.g. a one-hypothesis prediction net into a K-hypothesis one
+        state = model.adapt_state(state)
     own = model.state_dict()
     missing = sorted(set(own) - set(state))
     unexpected = sorted(set(state) - set(own))

@@ -1,0 +1,102 @@
+"""Several outcomes per step (PredictionConfig.hypotheses): winner-takes-all and the choice head."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import torch
+
+from afford.prediction.config import PRESETS
+from afford.prediction.model import PredictionNet
+from afford.prediction.train import sequence_loss
+from afford.sim import camera
+from afford.sim.affordance import encode_affordance
+from afford.sim.affordances import Affordance
+from afford.training.checkpoint import load_model_state
+
+TINY = PRESETS["tiny"]
+PLACE = Affordance("place", (0.1, 0.3, 0.06), 0, True)
+
+
+def place_rows(n: int) -> torch.Tensor:
+    return torch.from_numpy(np.stack([[encode_affordance(PLACE)]] * n))
+
+
+def two_outcomes(n: int) -> torch.Tensor:
+    """The same start and action; half the runs end bright where the place acts, half dark:
+    an outcome that one image can only blur."""
+    images = torch.full((n, 2, 4, 128, 128), 0.5)
+    r, c = camera.pixel_index(np.array(PLACE.position))
+    images[: n // 2, 1, :, r - 10 : r + 10, c - 10 : c + 10] = 0.95
+    images[n // 2 :, 1, :, r - 10 : r + 10, c - 10 : c + 10] = 0.05
+    return images
+
+
+def test_shapes_and_the_pick_follows_the_truth_or_the_choice_head():
+    torch.manual_seed(0)
+    net = PredictionNet(replace(TINY, hypotheses=3))
+    images = two_outcomes(4)
+    states, differences, candidates, logits, picks = net(images[:, 0], place_rows(4), None, images[:, 1:])
+    assert candidates.shape == (4, 1, 3, 4, 128, 128) and logits.shape == (4, 1, 3) and picks.shape == (4, 1)
+    for b in range(4):
+        assert torch.equal(states[b, 0], candidates[b, 0, picks[b, 0]])
+    free = net.rollout_hypotheses(images[:, 0], place_rows(4))
+    assert torch.equal(free[4], free[3].argmax(-1))  # planning: the most likely
+    with pytest.raises(ValueError, match="hypotheses"):
+        PredictionNet(replace(PRESETS["tiny-dense"], hypotheses=2))
+
+
+def test_the_winner_is_the_candidate_nearest_the_truth_where_it_changed():
+    from afford.prediction.model import winners
+
+    image = torch.full((1, 4, 8, 8), 0.5)
+    truth = image.clone()
+    truth[:, :, :2, :2] = 1.0  # what the step changed
+    right_there = truth.clone()
+    right_there[:, :, 4:, :] = 0.4  # off by 0.1 over half the image that did not change
+    wrong_there = image.clone()  # the rest exact, the change missed
+    candidates = torch.stack([wrong_there, right_there], 1)
+    differences = torch.cat([candidates, torch.ones(1, 2, 1, 8, 8)], 2)
+    assert winners(candidates, differences, image, truth).tolist() == [1]
+    nothing = winners(candidates, differences, image, image)  # no change: the whole image decides
+    assert nothing.tolist() == [0]
+
+
+def test_two_hypotheses_draw_both_outcomes_where_one_image_blurs():
+    """Trained on an outcome that goes either way, one image learns the grey in between; two
+    candidates learn bright and dark, and the choice head splits its belief."""
+    images, rows = two_outcomes(4), place_rows(4)
+    r, c = camera.pixel_index(np.array(PLACE.position))
+    spots = {}
+    for k in (1, 2):
+        torch.manual_seed(0)
+        net = PredictionNet(replace(TINY, hypotheses=k))
+        opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+        for _ in range(200):
+            loss = sequence_loss(net, images, rows, torch.ones(4, dtype=torch.long))
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        with torch.no_grad():
+            out = net.rollout_hypotheses(images[:, 0], rows)
+        if k == 1:
+            spots[k] = out[0][:, 0, :3, r - 5 : r + 5, c - 5 : c + 5].mean()
+        else:
+            spots[k] = out[2][0, 0, :, :3, r - 5 : r + 5, c - 5 : c + 5].mean((1, 2, 3))
+            probabilities = out[3][0, 0].softmax(-1)
+    assert 0.3 < spots[1] < 0.7  # one image: between the two, neither
+    assert spots[2].max() > 0.75 and spots[2].min() < 0.25  # two: each outcome
+    assert probabilities.min() > 0.2  # and the belief is split, as the data is
+
+
+def test_a_one_hypothesis_checkpoint_loads_into_k_and_predicts_the_same_at_first():
+    torch.manual_seed(0)
+    one = PredictionNet(TINY)
+    tensors = {f"model.{k}": v for k, v in one.state_dict().items()}
+    many = PredictionNet(replace(TINY, hypotheses=2))
+    load_model_state(many, tensors, "one.safetensors")
+    images = two_outcomes(2)
+    with torch.no_grad():
+        a = one.rollout(images[:, 0], place_rows(2))
+        b = many.rollout(images[:, 0], place_rows(2))  # uniform choice: the first candidate, the copy
+    assert torch.allclose(a, b, atol=1e-6)

@@ -62,6 +62,7 @@ def test_the_winner_is_the_candidate_nearest_the_truth_where_it_changed():
     assert nothing.tolist() == [0]
 
 
+@pytest.mark.slow
 def test_two_hypotheses_draw_both_outcomes_where_one_image_blurs():
     """Trained on an outcome that goes either way, one image learns the grey in between; two
     candidates learn bright and dark, and the choice head splits its belief."""

@@ -19,7 +19,7 @@ from afford.planning.outcome import Outcome, PlannerConfig
 from afford.planning.strategies import search
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
-from afford.planning.tree import SearchConfig, SearchResult
+from afford.planning.tree import SearchResult
 from afford.planning.uncertain import EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
@@ -44,7 +44,7 @@ def solve(
 
 def _oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     scene.reset(task.scene)
-    return _solve_search(task, "oracle", OracleModel(scene), scene, config.search)
+    return _judge(task, "oracle", _oracle_search(task, scene, config, None, task.max_steps), scene)
 
 
 def _nets(learned):
@@ -232,11 +232,6 @@ def _hybrid_rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
         return result
 
     return plan_from
-
-
-def _solve_search(task: Task, name: str, model, scene: Scene, config: SearchConfig) -> Outcome:
-    """Tree search (paper II.D) on a world model, then the plan executed in the simulator."""
-    return _judge(task, name, search(model, task.goal, task.max_steps, config), scene)
 
 
 def _solve_hybrid(task: Task, name: str, make_model, scene: Scene, config: PlannerConfig) -> Outcome:

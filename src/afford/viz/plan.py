@@ -29,7 +29,8 @@ def goal_panel(patch: np.ndarray, size: int, negative: bool, scale: int = SCALE)
     return panel
 
 
-def _action_text(a) -> str:
+def action_text(a) -> str:
+    """An affordance as pictures and reports name it: its type, and a turn's angle."""
     return a.type + (f" {a.turn:+g}" if a.turn else "")
 
 
@@ -44,7 +45,7 @@ def loop_picture(outcome, goal, path: str | Path) -> None:
     if loop.steps:
         first = draw_affordances(first, [loop.steps[0].action])
     bottom = [
-        label(first, "start" + (f": {_action_text(loop.steps[0].action)}" if loop.steps else " (no plan)"))
+        label(first, "start" + (f": {action_text(loop.steps[0].action)}" if loop.steps else " (no plan)"))
     ]
     for i, step in enumerate(loop.steps, 1):
         top.append(label(to_pil(step.predicted), f"foreseen {i} (gap {step.gap:.5f})"))
@@ -52,7 +53,7 @@ def loop_picture(outcome, goal, path: str | Path) -> None:
         if i < len(loop.steps):
             nxt = loop.steps[i].action
             seen = draw_affordances(seen, [nxt])
-            text = f"observed {i}: {_action_text(nxt)}"
+            text = f"observed {i}: {action_text(nxt)}"
         else:
             text = f"observed {i}: {'solved' if outcome.success else 'FAILED'}"
         bottom.append(label(seen, text))

@@ -16,7 +16,7 @@ import io
 from pathlib import Path
 
 from afford.viz.draw import draw_affordances, to_pil
-from afford.viz.plan import goal_panel
+from afford.viz.plan import action_text, goal_panel
 
 SCALE = 2  # pixels per image pixel in the page (128 x 128 states shown at 256)
 QUALITY = 80  # JPEG: a 4-step tree of ~700 states stays a few MB
@@ -58,7 +58,7 @@ def node_label(node) -> str:
     if not node.plan:
         return "start"
     a = node.plan[-1]
-    return a.type + (f" {a.turn:+g}" if a.turn else "") + f" at ({a.position[0]:.2f}, {a.position[1]:.2f})"
+    return action_text(a) + f" at ({a.position[0]:.2f}, {a.position[1]:.2f})"
 
 
 def node_info(node, index: int) -> str:
@@ -109,7 +109,7 @@ def report_html(outcome, goal) -> str:
     """The page for a planning `Outcome` (planning/run.py): its tree, or a closed loop's trees."""
     size = outcome.planned[0].shape[0]
     verdict = "solved" if outcome.success else "failed"
-    plan = " > ".join(node_label_of(a) for a in outcome.plan or ()) or "(none)"
+    plan = " > ".join(action_text(a) for a in outcome.plan or ()) or "(none)"
     parts = [
         f"<h2>{html.escape(outcome.task)}: {html.escape(outcome.planner)}, {verdict}</h2>",
         f"<p>plan: {html.escape(plan)}; {outcome.nodes} states, {outcome.seconds:.1f} s planning</p>",
@@ -121,7 +121,7 @@ def report_html(outcome, goal) -> str:
         for k, step in enumerate(loop.steps, 1):
             parts.append(tree_html(step.search, f"round {k}"))
             parts.append(
-                f'<div class="observed">observed after round {k} ({html.escape(node_label_of(step.action))}; '
+                f'<div class="observed">observed after round {k} ({html.escape(action_text(step.action))}; '
                 f"eq. (5) between foreseen and observed {step.gap:.5f}): "
                 f'<img src="{data_uri(to_pil(step.predicted, 1))}" title="foreseen"> '
                 f'<img src="{data_uri(to_pil(step.observed, 1))}" title="observed"></div>'
@@ -141,10 +141,6 @@ def report_html(outcome, goal) -> str:
         f"<style>{STYLE}</style></head>"
         f'<body><div id="tree">{"".join(parts)}</div>{view}<script>{SCRIPT}</script></body></html>'
     )
-
-
-def node_label_of(a) -> str:
-    return a.type + (f" {a.turn:+g}" if a.turn else "")
 
 
 def write_report(outcome, goal, path: str | Path) -> Path:

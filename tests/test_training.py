@@ -145,10 +145,13 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
     from afford.data.effects import sequence_effects
     from afford.data.format import Dataset
     from afford.prediction.config import PRESETS
+    from afford.data.torch_data import PredictionData
     from afford.prediction.train import run_sampler
 
     data = Dataset(small_dataset)
     indices = [i for i in data.indices() if data.sequence(i).length > 0]  # every split: both kinds
+    part = PredictionData(data, "train")
+    part.indices = indices
     labels = {i: sequence_effects(data.sequence(i)) for i in indices}
     truth = {
         "turn": np.array([any(s.type == "turn" for s in labels[i]) for i in indices]),
@@ -157,13 +160,33 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
     for what, flagged in truth.items():
         assert flagged.any() and not flagged.all(), what  # the small dataset holds both
         config = replace(PRESETS["tiny"], **{f"{what}_fraction": 0.7})
-        weights = run_sampler(data, indices, config, seed=0).weights.numpy()
+        weights = run_sampler([part], config, seed=0).weights.numpy()
         assert weights[flagged].sum() == pytest.approx(0.7) and weights.sum() == pytest.approx(1.0)
+        # Two datasets joined: the share holds over the runs of both, in their order.
+        joined = run_sampler([part, part], config, seed=0).weights.numpy()
+        assert joined[np.concatenate([flagged, flagged])].sum() == pytest.approx(0.7)
         with pytest.raises(ValueError, match="between 0 and 1"):
-            run_sampler(data, indices, replace(config, **{f"{what}_fraction": 1.5}), seed=0)
-    assert run_sampler(data, indices, PRESETS["tiny"], seed=0) is None
+            run_sampler([part], replace(config, **{f"{what}_fraction": 1.5}), seed=0)
+    assert run_sampler([part], PRESETS["tiny"], seed=0) is None
     with pytest.raises(ValueError, match="cannot both"):
-        run_sampler(data, indices, replace(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
+        run_sampler([part], replace(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
+
+
+def test_joined_datasets_give_every_run_of_each_and_their_own_streams(small_dataset):
+    from afford.data.format import Dataset
+    from afford.data.torch_data import JoinedData, PredictionData
+
+    data = Dataset(small_dataset)
+    first, second = (
+        PredictionData(data, "train", random_start=False),
+        PredictionData(data, "val", random_start=False),
+    )
+    joined = JoinedData([first, second])
+    assert len(joined) == len(first) + len(second)
+    assert torch.equal(joined[len(first)][1], second[0][1])
+    assert torch.equal(joined[len(first) - 1][1], first[len(first) - 1][1])
+    joined.rng = np.random.default_rng(3)
+    assert first.rng is not second.rng and first.rng.random() != second.rng.random()
 
 
 def test_effect_masks_move_with_the_augmented_images(small_dataset):

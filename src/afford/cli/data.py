@@ -22,6 +22,7 @@ def cmd_generate(args) -> int:
         workers=args.workers,
         shard_size=args.shard_size,
         turn_angles=args.turn_angles,
+        actions_drawn=args.actions,
         executor="ray" if args.ray is not None else "local",
         address=args.ray or None,
     )
@@ -236,6 +237,15 @@ def add_parsers(sub) -> None:
         default="quarter",
         help="quarter: every turn +90 or -90, the paper's (default); continuous: a random angle of "
         "either sign up to 180 degrees, to train a prediction net for continuous turns (paper V)",
+    )
+    g.add_argument(
+        "--actions",
+        choices=("uniform", "effects"),
+        default="uniform",
+        help="uniform: each execution drawn at random, the paper's (default); effects: each step "
+        "tries up to 12 executions and keeps the first with a side effect (data/draws.py), so that "
+        "a prediction net sees more of them (~40%% of executions, against ~12%%); not the paper's "
+        "distribution",
     )
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)

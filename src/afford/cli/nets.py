@@ -29,7 +29,11 @@ def cmd_train(args) -> int:
         config = preset_config(PRESETS, args.preset, steps=steps, threads=threads, pixel_input=pixel)
     config = apply_overrides(config, args.set)  # a bad --set is a UserError: one line
     try:
-        extra = {"predicted": args.predicted} if args.net == "recognition" else {}
+        extra = (
+            {"predicted": args.predicted}
+            if args.net == "recognition"
+            else {"more_data": tuple(args.more_data or ())}
+        )
         state = train(
             args.data, config, args.out, progress=not args.json, init=args.init, device=args.device, **extra
         )
@@ -230,6 +234,13 @@ def add_parsers(sub) -> None:
                 "--no-affordance-pixel",
                 action="store_true",
                 help="leave the affordance pixel's RGBD out of the action vector (Table 2 ablation)",
+            )
+            p.add_argument(
+                "--more-data",
+                action="append",
+                metavar="DIR",
+                help="also train on this dataset's train split (repeatable), e.g. one made with "
+                "`afford generate --actions effects`; validation stays on --data's",
             )
         p.set_defaults(func=cmd_train)
 

@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from afford.data.draws import DRAWS
 from afford.data.format import (
     SHARD_DIR,
     DataError,
@@ -42,6 +43,9 @@ class GenerateConfig:
     # "quarter": each drawn turn is +90 or -90 (the paper's); "continuous": the turn's angle is
     # drawn from [-180, 180] (paper V), for a prediction net that learns any angle.
     turn_angles: str = "quarter"
+    # How each step picks its execution (a key of draws.DRAWS): "uniform", the paper's; or
+    # "effects", which seeks side effects at every step (our option, not the paper's data).
+    actions_drawn: str = "uniform"
     executor: str = "local"  # a key of EXECUTORS
     address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
@@ -97,6 +101,7 @@ def _manifest_for(config: GenerateConfig) -> Manifest:
             "afford": __version__,
             "layout": asdict(LayoutConfig()),
             "turn_angles": config.turn_angles,
+            "actions": config.actions_drawn,
         },
     )
 
@@ -109,16 +114,26 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
         raise DataError(
             f"unknown turn angles {config.turn_angles!r}; expected one of {', '.join(TURN_ANGLES)}"
         )
+    if config.actions_drawn not in DRAWS:
+        raise DataError(f"unknown action draw {config.actions_drawn!r}; expected one of {', '.join(DRAWS)}")
     if (root / "dataset.json").exists():
         m = read_manifest(root)
         turns = m.generator.get("turn_angles", "quarter")
-        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns)
-        ours = (config.sequences, config.seed, config.shard_size, config.max_steps, config.turn_angles)
+        drawn = m.generator.get("actions", "uniform")
+        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn)
+        ours = (
+            config.sequences,
+            config.seed,
+            config.shard_size,
+            config.max_steps,
+            config.turn_angles,
+            config.actions_drawn,
+        )
         if theirs != ours:
             raise DataError(
                 f"{root}: holds a dataset of {m.sequences} sequences, seed {m.seed}, shard size "
-                f"{m.shard_size}, max steps {m.max_steps}, {turns} turns; resume it with the same "
-                "settings or use another --out"
+                f"{m.shard_size}, max steps {m.max_steps}, {turns} turns, {drawn} actions; resume "
+                "it with the same settings or use another --out"
             )
         return m
     m = _manifest_for(config)
@@ -147,7 +162,16 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
     report.skipped_shards = len(present)
     done = sum(len(manifest.shard_range(k)) for k in present)
     jobs = [
-        ShardJob(str(root), k, r.start, r.stop, config.seed, config.max_steps, config.turn_angles)
+        ShardJob(
+            str(root),
+            k,
+            r.start,
+            r.stop,
+            config.seed,
+            config.max_steps,
+            config.turn_angles,
+            config.actions_drawn,
+        )
         for k in missing
         for r in [manifest.shard_range(k)]
     ]

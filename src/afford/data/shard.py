@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from afford.data.draws import DRAWS, pose_array
 from afford.data.format import Sequence, quantise, shard_path, write_shard
 from afford.sim.affordance import AFF_WIDTH, encode_affordance
 from afford.sim.affordances import parametrise
@@ -19,20 +20,20 @@ from afford.sim.layout import LayoutConfig, random_layout
 from afford.sim.scene import Scene
 
 
-def pose_array(scene: Scene) -> np.ndarray:
-    rows = []
-    for o in scene.objects(present_only=False):
-        rows.append(np.concatenate([o.pos, o.quat]) if o.present else np.full(7, np.nan))
-    return np.array(rows, dtype=np.float32)
-
-
 TURN_ANGLES = ("quarter", "continuous")
 
 
 def make_sequence(
-    scene: Scene, seed: int, index: int, max_steps: int, turn_angles: str = "quarter"
+    scene: Scene,
+    seed: int,
+    index: int,
+    max_steps: int,
+    turn_angles: str = "quarter",
+    actions_drawn: str = "uniform",
 ) -> tuple[Sequence, int]:
-    """Sequence `index` of the dataset with `seed`, and how many drawn executions failed."""
+    """Sequence `index` of the dataset with `seed`, and how many drawn executions failed;
+    `actions_drawn`: a key of draws.DRAWS."""
+    draw = DRAWS[actions_drawn]
     rng = np.random.default_rng([seed, index])
     scene.reset(random_layout(rng, LayoutConfig()), check=False)  # free of overlaps by construction
     slots = tuple(name for name, _ in scene.slots)
@@ -48,8 +49,7 @@ def make_sequence(
         poses.append(pose_array(scene))
         if step == max_steps:
             break
-        # Draw from the list with turn parameters filled in (paper II.D); an affordance the
-        # arm cannot carry out is put back to the scene as it was and another is drawn.
+        # Draw from the list with turn parameters filled in (paper II.D).
         candidates = parametrise(affs)
         if turn_angles == "continuous":
             # Each +-90 becomes an angle of its sign and a random size: still one each way.
@@ -57,15 +57,8 @@ def make_sequence(
                 a.with_turn(float(np.sign(a.turn) * rng.uniform(1.0, 180.0))) if a.turn else a
                 for a in candidates
             ]
-        executed = None
-        while candidates and executed is None:
-            a = candidates.pop(int(rng.integers(len(candidates))))
-            snap = scene.snapshot()
-            if scene.execute(a).executed:
-                executed = a
-            else:
-                failed += 1
-                scene.restore(snap)
+        executed, f = draw(scene, candidates, rng)
+        failed += f
         if executed is None:
             break
         actions.append(encode_affordance(executed))
@@ -91,6 +84,7 @@ class ShardJob:
     seed: int
     max_steps: int
     turn_angles: str = "quarter"
+    actions_drawn: str = "uniform"
 
 
 @dataclass(frozen=True)
@@ -111,7 +105,7 @@ def make_shard(job: ShardJob) -> ShardResult:
         _worker_scene = Scene()
     seqs, failed = [], 0
     for i in range(job.start, job.stop):
-        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps, job.turn_angles)
+        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps, job.turn_angles, job.actions_drawn)
         seqs.append(seq)
         failed += f
     write_shard(shard_path(Path(job.root), job.shard), seqs)

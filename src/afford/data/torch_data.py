@@ -95,6 +95,31 @@ class PredictionData(TorchDataset):
         return to_chw(images), torch.from_numpy(actions)
 
 
+class JoinedData(TorchDataset):
+    """Several `PredictionData` (one per dataset) as one: runs of part 0, then of part 1, ...
+    Setting `rng` (a DataLoader worker's stream, `worker_init`) gives each part its own."""
+
+    def __init__(self, parts: list[PredictionData]):
+        self.parts = parts
+        self.starts = np.cumsum([0] + [len(p) for p in parts])
+
+    def __len__(self) -> int:
+        return int(self.starts[-1])
+
+    def __getitem__(self, k: int) -> tuple[torch.Tensor, ...]:
+        part = int(np.searchsorted(self.starts, k, side="right")) - 1
+        return self.parts[part][k - int(self.starts[part])]
+
+    @property
+    def rng(self) -> np.random.Generator:
+        return self.parts[0].rng
+
+    @rng.setter
+    def rng(self, rng: np.random.Generator) -> None:
+        for part, stream in zip(self.parts, rng.spawn(len(self.parts)), strict=True):
+            part.rng = stream
+
+
 def _effect_masks(data: PredictionData, seq, start: int, stop: int) -> np.ndarray:
     """(stop - start + 1, H, W) float32: state t's mask shows where step t - 1 had a side effect
     (the start state's is empty)."""

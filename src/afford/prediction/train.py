@@ -12,7 +12,7 @@ from torch.utils.data import DataLoader, WeightedRandomSampler
 from afford.data.augment import AugmentConfig
 from afford.data.effects import summary_effects
 from afford.data.format import Dataset, shard_path, shard_summary
-from afford.data.torch_data import PredictionData, collate_prediction, worker_init
+from afford.data.torch_data import JoinedData, PredictionData, collate_prediction, worker_init
 from afford.prediction.config import PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
@@ -130,9 +130,9 @@ def share_sampler(flagged: np.ndarray, fraction: float, seed: int, what: str) ->
     )
 
 
-def run_sampler(data: Dataset, indices: list[int], config: PredictionConfig, seed: int):
-    """The training runs' sampler: more turns (`turn_fraction`), more side effects
-    (`effect_fraction`), or None (runs as the data comes)."""
+def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int):
+    """The training runs' sampler over the runs of every part in turn: more turns
+    (`turn_fraction`), more side effects (`effect_fraction`), or None (runs as the data comes)."""
     asked = {"turn": config.turn_fraction, "effect": config.effect_fraction}
     asked = {what: share for what, share in asked.items() if share}
     if not asked:
@@ -140,8 +140,11 @@ def run_sampler(data: Dataset, indices: list[int], config: PredictionConfig, see
     if len(asked) > 1:
         raise ValueError("turn_fraction and effect_fraction cannot both be set")
     ((what, share),) = asked.items()
-    flags = sequence_flags(data)[what]
-    return share_sampler(np.array([flags[i] for i in indices]), share, seed, what)
+    flagged = []
+    for part in parts:
+        flags = sequence_flags(part.data)[what]
+        flagged += [flags[i] for i in part.indices]
+    return share_sampler(np.array(flagged), share, seed, what)
 
 
 def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
@@ -159,11 +162,13 @@ def train(
     progress: bool = True,
     init: str | Path | None = None,
     device: str = "auto",
+    more_data: tuple[str | Path, ...] = (),
 ) -> LoopState:
     """Train into `run_dir` (resuming from its last checkpoint); `init`: start a new run from
     another checkpoint's weights (fine-tuning), which must have the same architecture. Under
     torchrun, one rank of a DistributedDataParallel run; `device`: auto, cpu or cuda
-    (`training/distributed.py`)."""
+    (`training/distributed.py`). `more_data`: datasets whose train splits join `data_dir`'s
+    (validation stays on `data_dir`'s)."""
     world = join_world(device)
     torch.set_num_threads(rank_threads(config.threads, world))
     stream = config.seed * 1000 + world.rank  # each rank its own; rank 0 is a lone run's
@@ -177,11 +182,18 @@ def train(
         angle_noise=config.angle_noise,
     )
     region = config.effect_region if config.loss_effect else None
-    train_set = PredictionData(data, "train", config.max_steps, augment, seed=stream, effect_masks=region)
+    parts = [
+        PredictionData(
+            d, "train", config.max_steps, augment, seed=[stream, j] if j else stream, effect_masks=region
+        )
+        for j, d in enumerate([data, *(Dataset(more) for more in more_data)])
+    ]
     if config.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
-        draw = np.random.default_rng(config.seed).integers(len(train_set), size=len(train_set))
-        train_set.indices = [train_set.indices[k] for k in draw]
-    sampler = run_sampler(data, train_set.indices, config, stream)
+        rng = np.random.default_rng(config.seed)
+        for part in parts:
+            part.indices = [part.indices[k] for k in rng.integers(len(part), size=len(part))]
+    train_set = parts[0] if len(parts) == 1 else JoinedData(parts)
+    sampler = run_sampler(parts, config, stream)
     val_set = PredictionData(data, "val", config.max_steps, random_start=False)
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)

@@ -144,8 +144,8 @@ def test_keep_freed_memory_applies_where_glibc_is_and_nowhere_else():
 def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(small_dataset):
     from afford.data.effects import sequence_effects
     from afford.data.format import Dataset
-    from afford.prediction.config import PRESETS
     from afford.data.torch_data import PredictionData
+    from afford.prediction.config import PRESETS
     from afford.prediction.train import run_sampler
 
     data = Dataset(small_dataset)

@@ -19,7 +19,6 @@ from afford.sim.affordances import parametrise
 from afford.sim.layout import LayoutConfig, random_layout
 from afford.sim.scene import Scene
 
-
 TURN_ANGLES = ("quarter", "continuous")
 
 

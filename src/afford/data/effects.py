@@ -108,7 +108,7 @@ def acted_slot(before: np.ndarray, held_before: int, held_after: int, action: np
     return min(present, key=lambda k: float(np.linalg.norm(before[k, :2] - at[:2])))
 
 
-def _rested_on(rider: np.ndarray, host: np.ndarray, host_kind: str) -> bool:
+def rested_on(rider: np.ndarray, host: np.ndarray, host_kind: str) -> bool:
     """Was `rider` on top of `host`: above its centre, and over its top face (in the host's
     frame, so a cup beside the long block is not on it)?"""
     if rider[2] < host[2] + EFFECTS.rider_rise:
@@ -162,9 +162,9 @@ def _moved_kind(
     before: np.ndarray, after: np.ndarray, k: int, acted: int | None, held_after: int, host_kind: str
 ) -> str:
     """Carried when it rode on the acted-on object and still does (or was lifted with it)."""
-    if acted is None or not _rested_on(before[k], before[acted], host_kind):
+    if acted is None or not rested_on(before[k], before[acted], host_kind):
         return PUSHED
-    if held_after == acted or (_present(after[acted]) and _rested_on(after[k], after[acted], host_kind)):
+    if held_after == acted or (_present(after[acted]) and rested_on(after[k], after[acted], host_kind)):
         return CARRIED
     return PUSHED
 

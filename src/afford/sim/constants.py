@@ -190,6 +190,16 @@ class EffectThresholds:
     rider_margin: float = 0.01  # ... face (within this margin of its edges), rode on it
 
 
+@dataclass(frozen=True)
+class WordThresholds:
+    """When a sentence about a state is true (words/facts.py): read from true poses."""
+
+    beside: float = 0.03  # metres: left of / in front of needs this much between the centres
+    block_end: float = 0.05  # metres from the block's centre along it: on its left or right end
+    yaw_tolerance: float = 30.0  # degrees: the block lies across or lengthwise within this
+    table_rise: float = 0.015  # metres above its resting height: still on the table
+
+
 UR3_DH = UR3()
 GRIPPER = Gripper()
 CUP = Cup()
@@ -204,6 +214,7 @@ MOTION = Motion()
 LIMITS = Limits()
 TOLERANCES = Tolerances()
 EFFECTS = EffectThresholds()
+WORDS = WordThresholds()
 
 KINDS = ("cup", "ball", "support", "block")
 GRASPABLE = ("cup", "ball", "block")

@@ -1,0 +1,87 @@
+"""Goal sentences (words/): facts read from true poses of scripted scenes, sentences written
+and read back, and what cannot be read refused with the word or clause named."""
+
+import numpy as np
+import pytest
+from scenarios import BLOCK_TOP_ON_TABLE
+
+from afford.sim.constants import CUP
+from afford.sim.scene import ObjectSpec as O
+from afford.words.facts import State
+from afford.words.sentences import SentenceError, parse, sample_statement
+
+SIDE_DOWN = (np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0)  # the axis turned 90 degrees about y
+
+
+def truth(text: str, state: State) -> bool:
+    return parse(text, state).holds(state)
+
+
+def test_a_cup_on_the_blocks_left_end(scene):
+    scene.reset([O.upright("block", 0, 0.30), O.upright("cup", -0.09, 0.30, z=BLOCK_TOP_ON_TABLE)])
+    s = State.of_scene(scene)
+    assert truth("the cup is on the block and the blue cup sits at the left end of the block", s)
+    assert truth("the block lies across and the cup stands upright", s)
+    assert not truth("the cup is on the table", s)
+    assert not truth("the cup is on the right end of the block", s)
+    assert truth("the cup is not on the table and the yellow block does not lie lengthwise", s)
+
+
+def test_a_ball_off_the_table_is_gone(scene):
+    scene.reset([O.upright("ball", 0.1, 0.25), O.upright("cup", -0.1, 0.25)])
+    s = State.of_scene(scene)
+    assert truth("the ball is still there and the ball is right of the cup", s)
+    poses = s.poses.copy()
+    poses[s.slots.index("ball0")] = np.nan  # as a dataset stores an object that left the table
+    gone = State(poses, -1, s.slots, s.members)
+    assert truth("the ball has fallen off the table", gone)
+    assert not truth("the ball is on the table", gone)
+
+
+def test_a_toppled_cup(scene):
+    scene.reset([O("cup", (0.0, 0.25, CUP.radius), SIDE_DOWN)])
+    s = State.of_scene(scene)
+    assert truth("the cup has tipped over", s) and truth("the cup lies on its side", s)
+    assert not truth("the cup is upright", s)
+
+
+def test_several_of_a_kind_are_named_by_their_place_from_the_left(scene):
+    scene.reset([O.upright("support", 0.1, 0.3), O.upright("support", -0.1, 0.3), O.upright("cup", 0.0, 0.2)])
+    s = State.of_scene(scene)
+    assert truth("the left support is left of the right support", s)
+    assert truth("the cup is in front of the left black support", s)
+    with pytest.raises(SentenceError, match="names no object"):
+        parse("the support is upright", s)
+
+
+def test_what_cannot_be_read_is_refused_naming_it(scene):
+    scene.reset([O.upright("cup", 0.0, 0.25)])
+    s = State.of_scene(scene)
+    with pytest.raises(SentenceError, match="unknown word 'teapot'"):
+        parse("the teapot is on the table", s)
+    with pytest.raises(SentenceError, match="cannot read 'the cup the table'"):
+        parse("the cup the table", s)
+    with pytest.raises(SentenceError, match="names no object"):
+        parse("the ball is gone", s)
+
+
+def test_sampled_statements_are_as_true_as_asked_and_read_back(scene):
+    scene.reset(
+        [
+            O.upright("block", 0, 0.30),
+            O.upright("cup", 0.09, 0.30, z=BLOCK_TOP_ON_TABLE),
+            O.upright("ball", -0.1, 0.2),
+        ]
+    )
+    s = State.of_scene(scene)
+    rng = np.random.default_rng(0)
+    made = 0
+    for k in range(40):
+        want = bool(k % 2)
+        statement = sample_statement(s, want, rng)
+        if statement is None:
+            continue
+        made += 1
+        assert statement.holds(s) == want
+        assert parse(statement.text, s).clauses == statement.clauses
+    assert made >= 30

@@ -18,6 +18,7 @@ from afford.training.checkpoint import BEST
 WEIGHTS = Path(__file__).resolve().parent / "weights"  # shipped with the package
 RECOGNITION_FILE = "recognition.safetensors"
 PREDICTION_FILE = "prediction.safetensors"
+AGREEMENT_FILE = "agreement.safetensors"  # goal sentences (words/), beside the two nets
 
 
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:

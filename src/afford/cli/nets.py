@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from afford.cli import words
 from afford.cli.errors import CLIError
 from afford.cli.options import add_weights_argument, load_nets
 from afford.training.checkpoint import BEST
@@ -243,6 +244,7 @@ def add_parsers(sub) -> None:
                 "`afford generate --actions effects`; validation stays on --data's",
             )
         p.set_defaults(func=cmd_train)
+    words.add_train_parser(tsub)
 
     e = sub.add_parser("eval", help="evaluate a trained net", description="Evaluate a trained net.")
     esub = e.add_subparsers(dest="net", required=True)
@@ -299,6 +301,7 @@ def add_parsers(sub) -> None:
         q.add_argument("--checkpoint", default=BEST, help=f"file in RUN (default {BEST})")
         q.add_argument("--json", action="store_true")
         q.set_defaults(func=cmd_eval)
+    words.add_eval_parser(esub)
 
     x = sub.add_parser(
         "export",

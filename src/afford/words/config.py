@@ -1,0 +1,55 @@
+"""Agreement model configuration (words/model.py), with presets."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from afford.sim.camera import SIZE
+
+
+@dataclass(frozen=True)
+class AgreementConfig:
+    # Architecture: a strided convolution stem, then FiLM blocks conditioned on the clause.
+    in_channels: int = 4  # RGBD
+    image_size: int = SIZE
+    stem: tuple[int, ...] = (24, 48, 64)  # channels at strides 2, 4, 8: a 16x16 grid on 128x128
+    blocks: int = 3  # FiLM residual blocks on the grid
+    width: int = 64  # the grid's channels in the blocks
+    embed: int = 48  # word embedding
+    text: int = 96  # the clause encoder's GRU state
+    head: int = 128
+    # The words the model reads, in token-id order: filled from words/sentences.vocabulary()
+    # when training starts, and kept with the weights.
+    vocabulary: tuple[str, ...] = ()
+    # Training: clauses sampled afresh for every state drawn, half of them true.
+    batch_size: int = 64
+    lr: float = 2e-3
+    weight_decay: float = 1e-4
+    steps: int = 3000
+    warmup: int = 150
+    eval_every: int = 250
+    log_every: int = 25
+    shift_px: int = 2  # no mirroring: it would swap left and right
+    # With `afford train goals --predicted FILE`: this share of the draws are predicted states,
+    # whose clauses are judged on the true state they predict.
+    predicted_fraction: float = 0.5
+    threads: int = 2
+    seed: int = 0
+
+
+PRESETS = {
+    "cpu": AgreementConfig(),
+    "tiny": AgreementConfig(
+        stem=(4, 8, 8),
+        blocks=1,
+        width=8,
+        embed=8,
+        text=8,
+        head=8,
+        batch_size=8,
+        steps=20,
+        eval_every=10,
+        log_every=5,
+        warmup=5,
+    ),
+}

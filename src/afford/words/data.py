@@ -1,0 +1,85 @@
+"""Training data for the agreement model: a state's image and a clause sampled about it.
+
+Every state of a split (and, with a file of predicted states, every predicted state, judged by
+the true state it predicts) is drawn with a clause that is true or false with even odds, sampled
+afresh at each draw from the state's facts (`words/sentences.py`), so the model never sees one
+fixed set of sentences.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from torch.utils.data import Dataset as TorchDataset
+
+from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
+from afford.data.format import Dataset
+from afford.data.predicted import PredictedStates
+from afford.images import to_chw
+from afford.words.facts import RELATIONS, State
+from afford.words.sentences import Clause, names, sample_clause, write
+
+RELATION_IDS = {r: i for i, r in enumerate(sorted(RELATIONS))}
+
+
+def sequence_state(data: Dataset, index: int, t: int) -> State:
+    seq = data.sequence(index)
+    return State.in_sequence(seq.poses, seq.held, seq.slots, t)
+
+
+def draw_clause(state: State, rng: np.random.Generator) -> tuple[str, bool, str] | None:
+    """(text, truth, relation) of a clause about `state`, true with even odds; None when the
+    state affords no clause (no object it can name)."""
+    called = names(state)
+    truth = bool(rng.random() < 0.5)
+    for want in (truth, not truth):
+        clause: Clause | None = sample_clause(state, want, rng, called)
+        if clause is not None:
+            return write(clause, called, rng), want, clause.fact.relation
+    return None
+
+
+class ClauseData(TorchDataset):
+    """(image (4, H, W), clause text, truth, relation id) per draw: true states of a split, then
+    the predicted states of `predicted` (a PredictedStates) if given."""
+
+    def __init__(
+        self,
+        data: Dataset,
+        split: str,
+        predicted: PredictedStates | None = None,
+        augment_config: AugmentConfig = NO_AUGMENT,
+        seed: int = 0,
+    ):
+        self.data = data
+        self.items = [(i, t) for i in data.indices(split) for t in range(data.sequence(i).length + 1)]
+        self.real = len(self.items)
+        self.predicted = predicted
+        if predicted is not None:
+            self.items += [(int(i), int(t)) for i, t in zip(predicted.sequence, predicted.step, strict=True)]
+        self.config = augment_config
+        self.rng = np.random.default_rng(seed)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __getitem__(self, k: int):
+        i, t = self.items[k]
+        state = sequence_state(self.data, i, t)
+        image = self.data.sequence(i).image(t) if k < self.real else self.predicted.image(k - self.real)
+        drawn = draw_clause(state, self.rng)
+        if drawn is None:  # no object it can name: draw another state
+            return self[int(self.rng.integers(len(self)))]
+        text, truth, relation = drawn
+        images, _ = augment(image[None], [np.zeros((0, 7), np.float32)], self.config, self.rng)
+        return to_chw(images)[0], text, truth, RELATION_IDS[relation]
+
+
+def collate_clauses(batch) -> tuple[torch.Tensor, list[str], torch.Tensor, torch.Tensor]:
+    images, texts, truths, relations = zip(*batch, strict=True)
+    return (
+        torch.stack(images),
+        list(texts),
+        torch.tensor(truths, dtype=torch.float32),
+        torch.tensor(relations),
+    )

@@ -1,0 +1,108 @@
+"""The agreement model: how well a clause describes a state (paper V's proposal, our design).
+
+Paper V proposes replacing eq. (5)'s image comparison with "a neural network that quantifies
+agreement between predicted outcomes and sentences describing goals", e.g. CLIP. With no
+pretrained model within reach and scenes this simple, this one is small and trained on the
+simulator's states, where every clause's truth is known (`words/facts.py`). A GRU reads the
+clause; a convolution stem reads the RGBD state down to a 16x16 grid, and FiLM blocks (a scale
+and shift per channel, from the clause) let the clause choose what the grid looks for, with
+the grid's coordinates as two extra channels so "left of" and "the left end" can be read. The
+logit says how likely the clause holds. A statement's clauses are scored apart, and the
+statement holds when all do: its score is the sum of their log-probabilities.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+from afford.words.config import AgreementConfig
+from afford.words.sentences import SentenceError, tokens
+
+
+def coordinates(x: torch.Tensor) -> torch.Tensor:
+    """x (B, C, H, W) with two channels more: column and row in [-1, 1]."""
+    b, _, h, w = x.shape
+    cols = torch.linspace(-1, 1, w, device=x.device, dtype=x.dtype).expand(b, 1, h, w)
+    rows = torch.linspace(-1, 1, h, device=x.device, dtype=x.dtype)[:, None].expand(b, 1, h, w)
+    return torch.cat([x, cols, rows], 1)
+
+
+class FiLMBlock(nn.Module):
+    def __init__(self, width: int, text: int):
+        super().__init__()
+        self.conv1 = nn.Conv2d(width + 2, width, 3, padding=1)
+        self.norm = nn.GroupNorm(8 if width % 8 == 0 else 1, width, affine=False)
+        self.film = nn.Linear(text, 2 * width)
+        self.conv2 = nn.Conv2d(width, width, 3, padding=1)
+
+    def forward(self, x: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+        gamma, beta = self.film(t)[:, :, None, None].chunk(2, 1)
+        h = self.norm(self.conv1(coordinates(x)))
+        h = torch.relu((1 + gamma) * h + beta)
+        return x + self.conv2(h)
+
+
+class AgreementNet(nn.Module):
+    def __init__(self, config: AgreementConfig):
+        super().__init__()
+        if not config.vocabulary:
+            raise ValueError("an agreement model needs its vocabulary in its config")
+        self.config = config
+        self.vocabulary = config.vocabulary
+        self.ids = {w: i + 1 for i, w in enumerate(self.vocabulary)}  # 0 pads
+        self.embed = nn.Embedding(len(self.vocabulary) + 1, config.embed, padding_idx=0)
+        self.gru = nn.GRU(config.embed, config.text, batch_first=True)
+        layers, c = [], config.in_channels + 2
+        for out in config.stem:
+            layers += [nn.Conv2d(c, out, 3, stride=2, padding=1), nn.GELU()]
+            c = out
+        layers += [nn.Conv2d(c, config.width, 1)]
+        self.stem = nn.Sequential(*layers)
+        self.blocks = nn.ModuleList(FiLMBlock(config.width, config.text) for _ in range(config.blocks))
+        self.head = nn.Sequential(
+            nn.Linear(2 * config.width + config.text, config.head), nn.GELU(), nn.Linear(config.head, 1)
+        )
+
+    def token_ids(self, clauses: list[str]) -> torch.Tensor:
+        """(B, T) word ids of each clause, 0-padded; a word outside the vocabulary is refused."""
+        rows = []
+        for clause in clauses:
+            words = tokens(clause)
+            unknown = [w for w in words if w not in self.ids]
+            if unknown:
+                raise SentenceError(
+                    f"unknown word {unknown[0]!r}; the words known are: {', '.join(self.vocabulary)}"
+                )
+            rows.append([self.ids[w] for w in words])
+        out = torch.zeros((len(rows), max(1, max(len(r) for r in rows))), dtype=torch.long)
+        for i, r in enumerate(rows):
+            out[i, : len(r)] = torch.tensor(r, dtype=torch.long)
+        return out
+
+    def encode_text(self, ids: torch.Tensor) -> torch.Tensor:
+        lengths = (ids > 0).sum(1).clamp_min(1).cpu()
+        packed = nn.utils.rnn.pack_padded_sequence(
+            self.embed(ids), lengths, batch_first=True, enforce_sorted=False
+        )
+        _, h = self.gru(packed)
+        return h[-1]
+
+    def forward(self, images: torch.Tensor, ids: torch.Tensor) -> torch.Tensor:
+        """Logits (B,) that clause b (word ids (B, T)) holds in image b (B, C, H, W)."""
+        t = self.encode_text(ids)
+        x = self.stem(coordinates(images))
+        for block in self.blocks:
+            x = block(x, t)
+        pooled = torch.cat([x.amax((2, 3)), x.mean((2, 3)), t], 1)
+        return self.head(pooled)[:, 0]
+
+    @torch.no_grad()
+    def statement_logprob(self, images: torch.Tensor, statement: str) -> torch.Tensor:
+        """(B,) log-probability that every clause of `statement` holds in each image."""
+        clauses = " ".join(tokens(statement)).split(" and ")
+        ids = self.token_ids(clauses).to(images.device)
+        total = images.new_zeros(len(images))
+        for c in range(len(clauses)):
+            total += nn.functional.logsigmoid(self(images, ids[c : c + 1].expand(len(images), -1)))
+        return total

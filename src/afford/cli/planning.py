@@ -31,13 +31,22 @@ def _outcome_line(o) -> str:
 def cmd_plan(args) -> int:
     """Plan a task file, execute the plan in the simulator, draw it (paper Fig. 8)."""
     from afford.planning.run import USES_NETS, execute_perturbed, solve
-    from afford.planning.tasks import load_task
+    from afford.planning.sentence_goal import bind_weights
+    from afford.planning.tasks import load_task, sentence_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
 
     check_closed_loop(args, (args.planner,))
     scene = Scene()
-    task = load_task(args.task, scene)
+    if args.scene is not None:
+        if not args.goal:
+            raise CLIError("--scene needs --goal SENTENCE")
+        task = sentence_task(args.scene, args.goal, args.steps, scene)
+    else:
+        if args.goal:
+            raise CLIError("--goal goes with --scene; a task file holds its own goal")
+        task = load_task(args.task, scene)
+    bind_weights(task.goal, args.weights)
     perturbation = perturbation_of(args)
     learned = load_nets(args.weights) if args.planner in USES_NETS else None
     config = planner_config(args, progress=not args.json)
@@ -262,7 +271,22 @@ def add_parsers(sub) -> None:
         "picture like the paper's Fig. 8 and a JSON record. Exit status 1 when the executed plan misses "
         "the goal.",
     )
-    pl.add_argument("--task", required=True, metavar="TASK.json")
+    given = pl.add_mutually_exclusive_group(required=True)
+    given.add_argument("--task", metavar="TASK.json")
+    given.add_argument(
+        "--scene",
+        metavar="SCENE.json",
+        help="a scene file ({'objects': [...]}, as `afford scene --save` writes), planned to --goal",
+    )
+    pl.add_argument(
+        "--goal",
+        metavar="SENTENCE",
+        help='with --scene: the goal in words (paper V), e.g. "the cup is on the block and the ball is '
+        'gone"; success is the sentence judged on the true poses after the plan',
+    )
+    pl.add_argument(
+        "--steps", type=int, default=4, help="with --scene: the most actions a plan may take (default 4)"
+    )
     pl.add_argument(
         "--planner", choices=PLANNERS, default="oracle", help=f"one of {', '.join(PLANNERS)} (default oracle)"
     )

@@ -5,6 +5,7 @@
       "name": "order",
       "challenge": "what makes this task hard, in a sentence or two",
       "scene": {"objects": [{"kind": "cup", "pos": [x, y, z], "yaw": 0}, ...]},
+      "goal": {"text": "the cup is on the block and the ball is gone"}   a sentence (paper V), or
       "goal": {
         "type": "positive" | "negative",
         "channels": "rgbd" | "rgb",          (default: rgbd for positive, rgb for negative)
@@ -33,8 +34,12 @@ from PIL import Image
 from afford.errors import UserError
 from afford.planning.goal import CHANNELS, Goal, GoalError
 from afford.planning.predicates import Predicate, PredicateError, parse
+from afford.planning.sentence_goal import SentenceGoal, StatementHolds
 from afford.sim import camera as cam
 from afford.sim.scene import SceneError, read_json_file, specs_from_json
+from afford.words.facts import State
+from afford.words.sentences import SentenceError
+from afford.words.sentences import parse as parse_sentence
 
 TASK_FORMAT = 1
 MAX_STEPS_LIMIT = 8
@@ -49,9 +54,9 @@ class Task:
     name: str
     challenge: str
     scene: list  # list[ObjectSpec]
-    goal: Goal
+    goal: Goal | SentenceGoal
     max_steps: int
-    success: Predicate
+    success: Predicate | StatementHolds
     path: Path | None = None
     goal_scene: list | None = None  # the goal scene, when the goal was rendered from one
     crop: tuple[int, int, int, int] | None = None  # its pixel box (col, row, width, height)
@@ -107,7 +112,10 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
 
         scene = Scene()
     scene.reset(specs, settle=False, where="scene.")  # validated: nothing off the table, sunk or overlapping
-    goal, goal_scene, crop = _goal(obj["goal"], base, scene)
+    if isinstance(obj["goal"], dict) and "text" in obj["goal"]:
+        goal, goal_scene, crop = _sentence_goal(obj["goal"], scene), None, None
+    else:
+        goal, goal_scene, crop = _goal(obj["goal"], base, scene)
     return Task(
         name=str(obj.get("name", path.stem if path else "task")),
         challenge=str(obj.get("challenge", "")),
@@ -119,6 +127,33 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
         goal_scene=goal_scene,
         crop=crop,
     )
+
+
+def _sentence_goal(g: dict, scene) -> SentenceGoal:
+    """A goal sentence, read against the start scene (its words and the objects it names)."""
+    if set(g) != {"text"} or not isinstance(g["text"], str):
+        raise TaskError("goal: a sentence goal is {'text': '...'} and nothing else")
+    try:
+        return SentenceGoal(parse_sentence(g["text"], State.of_scene(scene)))
+    except SentenceError as e:
+        raise TaskError(f"goal.text: {e}") from None
+
+
+def sentence_task(scene_path: str | Path, text: str, max_steps: int, scene=None) -> Task:
+    """A scene file and a goal sentence (`afford plan --scene S.json --goal TEXT`): success is
+    the sentence judged on the true poses after the plan."""
+    p = Path(scene_path)
+    specs = specs_from_json(read_json_file(p, "scene", TaskError), "scene")
+    if not 1 <= max_steps <= MAX_STEPS_LIMIT:
+        raise TaskError(f"--max-steps: expected a whole number from 1 to {MAX_STEPS_LIMIT}")
+    if scene is None:
+        from afford.sim.scene import Scene
+
+        scene = Scene()
+    scene.reset(specs, settle=False, where="scene.")
+    goal = _sentence_goal({"text": text}, scene)
+    members = State.of_scene(scene).members
+    return Task(p.stem, "", specs, goal, max_steps, StatementHolds(goal.statement, members), p)
 
 
 def _goal(g: object, base: Path, scene) -> tuple[Goal, list | None, tuple | None]:

@@ -97,3 +97,22 @@ def scene_picture(image: np.ndarray, affordances, path: str | Path) -> None:
         label(draw_affordances(to_pil(image), affordances), f"affordances ({len(affordances)})"),
     ]
     hstack(panels).save(path)
+
+
+def text_patch(text: str, width: int, line_px: int = 11) -> np.ndarray:
+    """`text` wrapped to `width` px, black on white: (h, width, 3) floats in [0, 1], for a goal
+    given in words where pictures show a goal image."""
+    words, lines, line = text.split(), [], ""
+    for w in words:
+        trial = f"{line} {w}".strip()
+        if ImageDraw.Draw(Image.new("RGB", (1, 1))).textlength(trial) > width - 4 and line:
+            lines.append(line)
+            line = w
+        else:
+            line = trial
+    lines.append(line)
+    im = Image.new("RGB", (width, line_px * len(lines) + 4), (255, 255, 255))
+    draw = ImageDraw.Draw(im)
+    for k, text_line in enumerate(lines):
+        draw.text((2, 2 + k * line_px), text_line, fill=(0, 0, 0))
+    return np.asarray(im, dtype=np.float32) / 255.0

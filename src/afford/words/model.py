@@ -97,9 +97,9 @@ class AgreementNet(nn.Module):
         pooled = torch.cat([x.amax((2, 3)), x.mean((2, 3)), t], 1)
         return self.head(pooled)[:, 0]
 
-    @torch.no_grad()
     def statement_logprob(self, images: torch.Tensor, statement: str) -> torch.Tensor:
-        """(B,) log-probability that every clause of `statement` holds in each image."""
+        """(B,) log-probability that every clause of `statement` holds in each image
+        (differentiable in the images)."""
         clauses = " ".join(tokens(statement)).split(" and ")
         ids = self.token_ids(clauses).to(images.device)
         total = images.new_zeros(len(images))

@@ -1,6 +1,8 @@
 """Goal sentences (words/): facts read from true poses of scripted scenes, sentences written
 and read back, and what cannot be read refused with the word or clause named."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scenarios import BLOCK_TOP_ON_TABLE
@@ -85,3 +87,64 @@ def test_sampled_statements_are_as_true_as_asked_and_read_back(scene):
         assert statement.holds(s) == want
         assert parse(statement.text, s).clauses == statement.clauses
     assert made >= 30
+
+
+def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words():
+    import torch
+
+    from afford.words.config import PRESETS
+    from afford.words.model import AgreementNet
+    from afford.words.sentences import vocabulary
+
+    torch.manual_seed(0)
+    config = dataclasses.replace(PRESETS["tiny"], vocabulary=tuple(vocabulary()))
+    net = AgreementNet(config)
+    # Two images that differ only in a bright patch on the left or the right; the clause
+    # "the cup is on the table" is made true for the first and false for the second.
+    images = torch.zeros((8, 4, 128, 128))
+    images[::2, :, 50:70, 10:30] = 1.0
+    images[1::2, :, 50:70, 98:118] = 1.0
+    ids = net.token_ids(["the cup is on the table"] * 8)
+    truths = torch.tensor([1.0, 0.0] * 4)
+    logits = net(images, ids)
+    assert logits.shape == (8,)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-2)
+    losses = []
+    for _ in range(80):
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(net(images, ids), truths)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    assert losses[-1] < 0.5 * losses[0]
+    both = net.statement_logprob(images[:2], "the cup is on the table and the ball is gone")
+    assert both.shape == (2,) and bool((both <= 0).all())
+    with pytest.raises(SentenceError, match="unknown word 'teapot'"):
+        net.token_ids(["the teapot is gone"])
+
+
+def test_a_sentence_goal_in_a_task_file_is_read_against_its_scene(tmp_path, scene):
+    import json
+
+    from afford.planning.tasks import TaskError, load_task
+
+    task = {
+        "name": "words",
+        "scene": {
+            "objects": [
+                {"kind": "cup", "pos": [0.1, 0.25, 0.0425]},
+                {"kind": "block", "pos": [0, 0.3, 0.025]},
+            ]
+        },
+        "goal": {"text": "the cup is on the block"},
+        "max_steps": 2,
+        "success": {"on": {"object": "cup0", "host": "block0"}},
+    }
+    path = tmp_path / "t.json"
+    path.write_text(json.dumps(task))
+    loaded = load_task(path, scene)
+    assert loaded.goal.text == "the cup is on the block" and not loaded.goal.negative
+    task["goal"] = {"text": "the ball is on the block"}
+    path.write_text(json.dumps(task))
+    with pytest.raises(TaskError, match="goal.text: 'the ball' names no object"):
+        load_task(path, scene)

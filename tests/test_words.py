@@ -148,3 +148,18 @@ def test_a_sentence_goal_in_a_task_file_is_read_against_its_scene(tmp_path, scen
     path.write_text(json.dumps(task))
     with pytest.raises(TaskError, match="goal.text: 'the ball' names no object"):
         load_task(path, scene)
+
+
+def test_a_ball_under_the_blocks_overhang_is_gone_from_the_camera(scene):
+    from scenarios import SUPPORT_TOP
+
+    from afford.words.facts import hidden_in_image
+
+    block_on_support = [O.upright("support", 0.01, 0.34), O.upright("block", 0.01, 0.34, 0.0, z=SUPPORT_TOP)]
+    scene.reset([O.upright("ball", 0.09, 0.34), *block_on_support])
+    s = State.of_scene(scene)  # the renderer's segmentation
+    assert truth("the ball is gone", s) and not truth("the ball is on the table and the ball is not gone", s)
+    assert hidden_in_image(s, scene.observe()) == s.hidden  # the colour test a dataset's images get
+    scene.reset([O.upright("ball", 0.09, 0.25), *block_on_support])
+    s = State.of_scene(scene)
+    assert not truth("the ball is gone", s) and not hidden_in_image(s, scene.observe())

@@ -198,6 +198,10 @@ class WordThresholds:
     block_end: float = 0.05  # metres from the block's centre along it: on its left or right end
     yaw_tolerance: float = 30.0  # degrees: the block lies across or lengthwise within this
     table_rise: float = 0.015  # metres above its resting height: still on the table
+    # Gone from the camera: at most this many pixels of its colour within this radius of where
+    # its centre projects (a dataset keeps images, not the renderer's segmentation).
+    hidden_pixels: int = 3
+    hidden_radius_px: float = 8.0
 
 
 UR3_DH = UR3()

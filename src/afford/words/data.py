@@ -24,7 +24,7 @@ RELATION_IDS = {r: i for i, r in enumerate(sorted(RELATIONS))}
 
 def sequence_state(data: Dataset, index: int, t: int) -> State:
     seq = data.sequence(index)
-    return State.in_sequence(seq.poses, seq.held, seq.slots, t)
+    return State.in_sequence(seq.poses, seq.held, seq.slots, t, seq.image(t))
 
 
 def draw_clause(state: State, rng: np.random.Generator) -> tuple[str, bool, str] | None:

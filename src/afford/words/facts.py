@@ -23,18 +23,31 @@ from afford.sim.specs import REST_HALF_HEIGHT
 class State:
     """poses (slots, 7: x, y, z, qw, qx, qy, qz; NaN: off the table); held: a slot or -1;
     members: the slots of the scene's objects (those on the table at its start), so that an
-    object gone since is told from a slot the scene never used."""
+    object gone since is told from a slot the scene never used; hidden: cups and balls on the
+    table that the camera does not see (under the block, behind another)."""
 
     poses: np.ndarray
     held: int
     slots: tuple[str, ...]
     members: frozenset[int]
+    hidden: frozenset[int] = frozenset()
 
     @classmethod
-    def in_sequence(cls, poses: np.ndarray, held: np.ndarray, slots: tuple[str, ...], t: int) -> State:
-        """State t of a stored sequence (its poses and held slots per state)."""
+    def in_sequence(
+        cls,
+        poses: np.ndarray,
+        held: np.ndarray,
+        slots: tuple[str, ...],
+        t: int,
+        image: np.ndarray | None = None,
+    ) -> State:
+        """State t of a stored sequence (its poses and held slots per state); with the state's
+        image (H, W, 4), the cups and balls it does not show are hidden."""
         members = frozenset(int(k) for k in np.flatnonzero(~np.isnan(poses[0, :, 0])))
-        return cls(poses[t], int(held[t]), tuple(slots), members)
+        state = cls(poses[t], int(held[t]), tuple(slots), members)
+        if image is None:
+            return state
+        return cls(state.poses, state.held, state.slots, members, hidden_in_image(state, image))
 
     @classmethod
     def of_scene(cls, scene, members: frozenset[int] | None = None) -> State:
@@ -46,7 +59,15 @@ class State:
         held = slots.index(scene.held) if scene.held else -1
         if members is None:
             members = frozenset(int(k) for k in np.flatnonzero(~np.isnan(poses[:, 0])))
-        return cls(poses, held, slots, members)
+        hidden = frozenset(
+            k
+            for k, name in enumerate(slots)
+            if slot_kind(name) in COLOUR_TESTS
+            and k != held
+            and not np.isnan(poses[k, 0])
+            and scene.visible_pixels(name) <= WORDS.hidden_pixels
+        )
+        return cls(poses, held, slots, members, hidden)
 
     def kind(self, k: int) -> str:
         return slot_kind(self.slots[k])
@@ -57,6 +78,32 @@ class State:
     def standing(self, k: int) -> bool:
         """On the table's scene and not in the gripper: where relations between places hold."""
         return self.present(k) and k != self.held
+
+
+# Which pixels show a cup (blue) or a ball (red) under the scene's light: (rgb (N, 3)) -> (N,).
+COLOUR_TESTS = {
+    "cup": lambda c: (c[:, 2] > 0.35) & (c[:, 2] > 1.8 * c[:, 0]) & (c[:, 2] > 1.5 * c[:, 1]),
+    "ball": lambda c: (c[:, 0] > 0.45) & (c[:, 0] > 2.5 * c[:, 1]) & (c[:, 0] > 2.5 * c[:, 2]),
+}
+
+
+def hidden_in_image(state: State, image: np.ndarray) -> frozenset[int]:
+    """The cups and balls on the table of which `image` shows at most WORDS.hidden_pixels
+    pixels of their colour near where their centre projects."""
+    from afford.sim.camera import world_to_pixel
+
+    size = image.shape[0]
+    rows, cols = np.mgrid[0:size, 0:size]
+    hidden = set()
+    for k in range(len(state.slots)):
+        if state.kind(k) not in COLOUR_TESTS or not state.standing(k):
+            continue
+        col, row = world_to_pixel(state.poses[k][None, :3].astype(float))[0]
+        near = (cols + 0.5 - col) ** 2 + (rows + 0.5 - row) ** 2 <= WORDS.hidden_radius_px**2
+        shown = COLOUR_TESTS[state.kind(k)](image[near][:, :3]).sum()
+        if shown <= WORDS.hidden_pixels:
+            hidden.add(k)
+    return frozenset(hidden)
 
 
 @dataclass(frozen=True)
@@ -149,7 +196,7 @@ PLACED = ("cup", "ball", "support", "block")
 RELATIONS: dict[str, Relation] = {
     "on": Relation(SMALL, on, ("block", "support"), ("table",)),
     "on_end": Relation(SMALL, on_end, (), ("left", "right")),
-    "gone": Relation(SMALL, lambda s, k, o: not s.present(k)),
+    "gone": Relation(SMALL, lambda s, k, o: not s.present(k) or k in s.hidden),
     "tipped": Relation(("cup", "support", "block"), lambda s, k, o: tipped(s, k)),
     "upright": Relation(("cup", "support", "block"), lambda s, k, o: s.standing(k) and not tipped(s, k)),
     "held": Relation(("cup", "ball", "block"), lambda s, k, o: s.held == k),

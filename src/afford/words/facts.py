@@ -9,6 +9,7 @@ of and what makes it true. The thresholds live in `sim/constants.WORDS`.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -87,13 +88,17 @@ COLOUR_TESTS = {
 }
 
 
+@functools.cache
+def _grid(size: int) -> tuple[np.ndarray, np.ndarray]:
+    return np.mgrid[0:size, 0:size]
+
+
 def hidden_in_image(state: State, image: np.ndarray) -> frozenset[int]:
     """The cups and balls on the table of which `image` shows at most WORDS.hidden_pixels
     pixels of their colour near where their centre projects."""
     from afford.sim.camera import world_to_pixel
 
-    size = image.shape[0]
-    rows, cols = np.mgrid[0:size, 0:size]
+    rows, cols = _grid(image.shape[0])
     hidden = set()
     for k in range(len(state.slots)):
         if state.kind(k) not in COLOUR_TESTS or not state.standing(k):

@@ -87,6 +87,7 @@ def cmd_plan(args) -> int:
 def cmd_bench_tasks(args) -> int:
     """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
     from afford.planning.run import USES_NETS, execute_perturbed, solve
+    from afford.planning.sentence_goal import bind_weights
     from afford.planning.tasks import load_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
@@ -109,6 +110,7 @@ def cmd_bench_tasks(args) -> int:
         rows = []
         for folder, f in files:
             task = load_task(f, scene)
+            bind_weights(task.goal, args.weights)
             live = not args.json and sys.stdout.isatty()
             if live:
                 print(f"{task.name} ...", end="", flush=True)
@@ -230,6 +232,7 @@ def cmd_diagnose(args) -> int:
     from tqdm import tqdm
 
     from afford.planning.diagnose import diagnose
+    from afford.planning.sentence_goal import bind_weights
     from afford.planning.tasks import load_task
     from afford.sim.scene import Scene
 
@@ -244,7 +247,9 @@ def cmd_diagnose(args) -> int:
     scene = Scene()
     out = []
     for f in tqdm(files, desc="diagnose", unit="task", disable=args.json or len(files) == 1):
-        d = diagnose(load_task(f, scene), scene, learned)
+        task = load_task(f, scene)
+        bind_weights(task.goal, args.weights)
+        d = diagnose(task, scene, learned)
         out.append(d.to_dict())
         if not args.json:
             tqdm.write(d.describe())

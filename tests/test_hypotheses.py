@@ -46,6 +46,23 @@ def test_shapes_and_the_pick_follows_the_truth_or_the_choice_head():
         PredictionNet(replace(PRESETS["tiny-dense"], hypotheses=2))
 
 
+def test_effect_labels_pick_the_candidate_and_teach_the_head():
+    torch.manual_seed(0)
+    config = replace(TINY, hypotheses=2, hypotheses_by="effect")
+    net = PredictionNet(config)
+    images = two_outcomes(4)
+    labels = torch.tensor([[True], [False], [False], [True]])
+    _, _, _, logits, picks = net(images[:, 0], place_rows(4), None, images[:, 1:], labels)
+    assert picks[:, 0].tolist() == [1, 0, 0, 1]  # the labels, not the winners
+    effects = torch.zeros((4, 1, 128, 128), dtype=torch.bool)
+    effects[0, 0, :3, :3] = effects[3, 0, :3, :3] = True
+    loss = sequence_loss(net, images, place_rows(4), torch.ones(4, dtype=torch.long), effects)
+    loss.backward()
+    assert net.decoder.choice.weight.grad.abs().sum() > 0  # the head learns the labels
+    with pytest.raises(ValueError, match="hypotheses=2"):
+        PredictionNet(replace(TINY, hypotheses=3, hypotheses_by="effect"))
+
+
 def test_the_winner_is_the_candidate_nearest_the_truth_where_it_changed():
     from afford.prediction.model import winners
 

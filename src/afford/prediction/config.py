@@ -94,6 +94,10 @@ class PredictionConfig:
     hypotheses: int = 1
     loss_choice: float = 0.1  # the choice head's cross-entropy against the winner
     loss_others: float = 0.05  # every candidate's absolute error, so that none stops learning
+    # Which candidate takes each step's loss: "winner", the one nearest the truth; "effect"
+    # (K = 2), chosen by the step's label (data/effects.py): the first draws canonical steps,
+    # the second steps with a side effect, and the head learns how likely a side effect is.
+    hypotheses_by: str = "winner"
 
     @property
     def latent_size(self) -> int:

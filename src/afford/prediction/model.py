@@ -85,6 +85,10 @@ class PredictionNet(nn.Module):
             )
         if config.hypotheses < 1 or (config.hypotheses > 1 and config.architecture != "spatial"):
             raise ValueError("hypotheses: 1, or more with the spatial architecture")
+        if config.hypotheses_by not in ("winner", "effect"):
+            raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {config.hypotheses_by!r}")
+        if config.hypotheses_by == "effect" and config.hypotheses != 2:
+            raise ValueError("hypotheses_by=effect needs hypotheses=2: a canonical and a side-effect outcome")
         encoder, p_module, decoder = ARCHITECTURES[config.architecture]
         self.config = config
         self.encoder = encoder(config)
@@ -119,9 +123,18 @@ class PredictionNet(nn.Module):
         new values and, last, its mask."""
         return self.step_hypotheses(latent, memory, image, rows)[:4]
 
-    def step_hypotheses(self, latent, memory, image, rows, truth: torch.Tensor | None = None):
+    def step_hypotheses(
+        self,
+        latent,
+        memory,
+        image,
+        rows,
+        truth: torch.Tensor | None = None,
+        label: torch.Tensor | None = None,
+    ):
         """`step_with_difference` and, with K > 1 hypotheses, the `Hypotheses` (else None):
-        the candidate carried on is the one nearest `truth` where it is given (training's
+        the candidate carried on is the one `label` (B,) names where it is given (training by
+        effect labels), else the one nearest `truth` where that is given (training's
         winner-takes-all), else the one the choice head finds most likely."""
         vector = self.action_vector(rows, image)
         pixel = world_to_pixel(rows[:, Col.POSITION])
@@ -147,7 +160,12 @@ class PredictionNet(nn.Module):
         candidates = apply_difference(image.repeat_interleave(k, 0), differences.flatten(0, 1))  # eq. (3)
         candidates = candidates.view(b, k, *image.shape[1:])
         logits = self.decoder.choice_logits(dc)
-        picked = logits.argmax(1) if truth is None else winners(candidates, differences, image, truth)
+        if label is not None:
+            picked = label.long()
+        elif truth is not None:
+            picked = winners(candidates, differences, image, truth)
+        else:
+            picked = logits.argmax(1)
         at = torch.arange(b, device=image.device)
         return (
             next_latent,
@@ -201,10 +219,12 @@ class PredictionNet(nn.Module):
         actions: torch.Tensor,
         steps: torch.Tensor | None = None,
         truth: torch.Tensor | None = None,
+        labels: torch.Tensor | None = None,
     ) -> tuple:
         """`rollout_with_differences`, and with K > 1 hypotheses also every step's candidates
         (B, L, K, C, H, W), logits (B, L, K) and picks (B, L) (else None, None, None); with
-        `truth` (B, L, C, H, W) each step carries on its winner (`step_hypotheses`)."""
+        `truth` (B, L, C, H, W) each step carries on its winner, with `labels` (B, L) the
+        candidate they name (`step_hypotheses`)."""
         b, length = actions.shape[:2]
         at = image.device
         order = (
@@ -220,6 +240,7 @@ class PredictionNet(nn.Module):
         image = image[order]
         acts = actions[order]
         truth = None if truth is None else truth[order]
+        labels = None if labels is None else labels[order]
         latent, memory = self.encode(image)
         states = differences = candidates = logits = picks = None
         for i in range(length):
@@ -227,7 +248,12 @@ class PredictionNet(nn.Module):
             if n == 0:
                 break
             latent, memory, image, difference, hyp = self.step_hypotheses(
-                latent[:n], memory[:n], image[:n], acts[:n, i], None if truth is None else truth[:n, i]
+                latent[:n],
+                memory[:n],
+                image[:n],
+                acts[:n, i],
+                None if truth is None else truth[:n, i],
+                None if labels is None else labels[:n, i],
             )
             if states is None:  # made here: under autocast the outputs may be bfloat16
                 states = image.new_zeros((b, length, *image.shape[1:]))
@@ -250,10 +276,11 @@ class PredictionNet(nn.Module):
         actions: torch.Tensor,
         steps: torch.Tensor | None = None,
         truth: torch.Tensor | None = None,
+        labels: torch.Tensor | None = None,
     ) -> tuple:
         """Training's forward pass, `rollout_hypotheses`: a call through the module, so that
         DistributedDataParallel sees it."""
-        return self.rollout_hypotheses(image, actions, steps, truth)
+        return self.rollout_hypotheses(image, actions, steps, truth, labels)
 
     def rollout(
         self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None

@@ -72,9 +72,12 @@ def sequence_loss(
     c = getattr(net, "module", net).config
     truth = images[:, 1:]
     many = c.hypotheses > 1
+    labels = None
+    if many and c.hypotheses_by == "effect" and effects is not None:  # else (validation) the winner
+        labels = effects.flatten(2).any(-1)  # (B, L): the step had a side effect
     with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
         predicted, differences, candidates, logits, picks = net(
-            images[:, 0], actions, steps, truth if many else None
+            images[:, 0], actions, steps, truth if many else None, labels
         )
     predicted, differences = predicted.float(), differences.float()
     diff = predicted - truth
@@ -181,7 +184,10 @@ def train(
         position_noise=config.position_noise,
         angle_noise=config.angle_noise,
     )
-    region = config.effect_region if config.loss_effect else None
+    by_effect = config.hypotheses > 1 and config.hypotheses_by == "effect"
+    if by_effect and config.loss_effect and config.effect_region != "effects":
+        raise ValueError("hypotheses_by=effect labels steps by their effect masks: effect_region=effects")
+    region = config.effect_region if config.loss_effect else ("effects" if by_effect else None)
     parts = [
         PredictionData(
             d, "train", config.max_steps, augment, seed=[stream, j] if j else stream, effect_masks=region

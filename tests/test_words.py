@@ -93,25 +93,30 @@ def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words():
     import torch
 
     from afford.words.config import PRESETS
+    from afford.words.facts import RELATIONS
     from afford.words.model import AgreementNet
     from afford.words.sentences import vocabulary
 
     torch.manual_seed(0)
-    config = dataclasses.replace(PRESETS["tiny"], vocabulary=tuple(vocabulary()))
+    config = dataclasses.replace(
+        PRESETS["tiny"], vocabulary=tuple(vocabulary()), relations=tuple(sorted(RELATIONS))
+    )
     net = AgreementNet(config)
-    # Two images that differ only in a bright patch on the left or the right; the clause
-    # "the cup is on the table" is made true for the first and false for the second.
+    # Images that differ only in a bright patch on the left or the right; "the cup is left of
+    # the ball" is made true for the first kind and false for the second, and its negation the
+    # other way round, so the model must read both the image and the clause.
     images = torch.zeros((8, 4, 128, 128))
     images[::2, :, 50:70, 10:30] = 1.0
     images[1::2, :, 50:70, 98:118] = 1.0
-    ids = net.token_ids(["the cup is on the table"] * 8)
-    truths = torch.tensor([1.0, 0.0] * 4)
-    logits = net(images, ids)
-    assert logits.shape == (8,)
-    opt = torch.optim.Adam(net.parameters(), lr=1e-2)
+    clauses = ["the cup is left of the ball", "the cup is left of the ball"] * 2
+    clauses += ["the cup is not left of the ball", "the cup is not left of the ball"] * 2
+    encoded = net.encode(clauses)
+    truths = torch.tensor([1.0, 0.0] * 2 + [0.0, 1.0] * 2)
+    assert net(images, encoded).shape == (8,)
+    opt = torch.optim.Adam(net.parameters(), lr=3e-2)
     losses = []
-    for _ in range(80):
-        loss = torch.nn.functional.binary_cross_entropy_with_logits(net(images, ids), truths)
+    for _ in range(60):
+        loss = torch.nn.functional.binary_cross_entropy_with_logits(net(images, encoded), truths)
         opt.zero_grad()
         loss.backward()
         opt.step()
@@ -120,7 +125,7 @@ def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words():
     both = net.statement_logprob(images[:2], "the cup is on the table and the ball is gone")
     assert both.shape == (2,) and bool((both <= 0).all())
     with pytest.raises(SentenceError, match="unknown word 'teapot'"):
-        net.token_ids(["the teapot is gone"])
+        net.encode(["the teapot is gone"])
 
 
 def test_a_sentence_goal_in_a_task_file_is_read_against_its_scene(tmp_path, scene):
@@ -132,7 +137,7 @@ def test_a_sentence_goal_in_a_task_file_is_read_against_its_scene(tmp_path, scen
         "name": "words",
         "scene": {
             "objects": [
-                {"kind": "cup", "pos": [0.1, 0.25, 0.0425]},
+                {"kind": "cup", "pos": [0.12, 0.2, 0.0425]},
                 {"kind": "block", "pos": [0, 0.3, 0.025]},
             ]
         },

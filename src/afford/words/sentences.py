@@ -226,8 +226,20 @@ _PATTERNS = [
 ]
 
 
-def parse(text: str, state: State) -> Statement:
-    """Read `text` into clauses, its names resolved in `state` (a task's start scene)."""
+@dataclass(frozen=True)
+class Parts:
+    """A clause as read, before its names are resolved: the relation, the subject's noun
+    phrase, the other argument (a noun phrase, "the table", a word such as "left", or "" for
+    none) and whether it is negated. What the agreement model reads."""
+
+    relation: str
+    subject: str
+    other: str
+    negated: bool
+
+
+def clause_texts(text: str) -> list[str]:
+    """The clauses of a sentence, each normalised; every word known, or a SentenceError."""
     known = set(vocabulary())
     words = tokens(text)
     if not words:
@@ -235,29 +247,36 @@ def parse(text: str, state: State) -> Statement:
     unknown = [w for w in words if w not in known]
     if unknown:
         raise SentenceError(f"unknown word {unknown[0]!r}; the words known are: {', '.join(sorted(known))}")
-    called = {phrase: k for k, phrases in names(state).items() for phrase in phrases}
-    clauses = []
-    for part in " ".join(words).split(" and "):
-        clauses.append(_clause(part, called))
-    return Statement(tuple(clauses), text)
+    return " ".join(words).split(" and ")
 
 
-def _clause(part: str, called: dict[str, int]) -> Clause:
+def read_clause(part: str) -> Parts:
+    """One normalised clause, read by the phrasing it is written in."""
     for relation, word, negated, pattern in _PATTERNS:
         m = pattern.match(part)
         if m is None:
             continue
-        x = _resolve(m.group("x"), called)
-        if "y" in pattern.groupindex:
-            y = m.group("y")
-            other: int | str | None = "table" if y == "the table" else _resolve(y, called)
-        else:
-            other = word
-        return Clause(Fact(relation, x, other), bool(negated))
+        other = m.group("y") if "y" in pattern.groupindex else (word or "")
+        return Parts(relation, m.group("x"), other, bool(negated))
     raise SentenceError(
         f"cannot read {part!r} as a clause; clauses read like 'the cup is on the block', "
         "'the ball is gone', 'the block lies across', joined by 'and'"
     )
+
+
+def parse(text: str, state: State) -> Statement:
+    """Read `text` into clauses, its names resolved in `state` (a task's start scene)."""
+    called = {phrase: k for k, phrases in names(state).items() for phrase in phrases}
+    clauses = []
+    for part in clause_texts(text):
+        p = read_clause(part)
+        other: int | str | None = p.other or None
+        if p.other == "the table":
+            other = "table"
+        elif p.other.startswith("the "):
+            other = _resolve(p.other, called)
+        clauses.append(Clause(Fact(p.relation, _resolve(p.subject, called), other), p.negated))
+    return Statement(tuple(clauses), text)
 
 
 def _resolve(phrase: str, called: dict[str, int]) -> int:

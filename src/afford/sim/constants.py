@@ -202,6 +202,10 @@ class WordThresholds:
     # its centre projects (a dataset keeps images, not the renderer's segmentation).
     hidden_pixels: int = 3
     hidden_radius_px: float = 8.0
+    # Words are vague at their edges: a cup 3.1 cm left of a ball is barely "left of" it.
+    # Sampled clauses (training, evaluation) keep this far from every threshold above.
+    vague_m: float = 0.01
+    vague_deg: float = 10.0
 
 
 UR3_DH = UR3()

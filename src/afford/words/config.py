@@ -9,20 +9,18 @@ from afford.sim.camera import SIZE
 
 @dataclass(frozen=True)
 class AgreementConfig:
-    # Architecture: a strided convolution stem to a grid, residual blocks on it, noun phrases
-    # that attend over it, a head on what they found (words/model.py).
+    # Architecture: a strided convolution stem, then FiLM blocks conditioned on the clause.
     in_channels: int = 4  # RGBD
     image_size: int = SIZE
     stem: tuple[int, ...] = (24, 48, 64)  # channels at strides 2, 4, 8: a 16x16 grid on 128x128
-    blocks: int = 3  # residual blocks on the grid
+    blocks: int = 3  # FiLM residual blocks on the grid
     width: int = 64  # the grid's channels in the blocks
-    embed: int = 32  # word embedding
-    text: int = 64  # a noun phrase's GRU state: its query over the grid
+    embed: int = 48  # word embedding
+    text: int = 96  # the clause encoder's GRU state
     head: int = 128
-    # The words and relations the model reads, in id order: filled from words/sentences.py and
-    # words/facts.py when training starts, and kept with the weights.
+    # The words the model reads, in token-id order: filled from words/sentences.vocabulary()
+    # when training starts, and kept with the weights.
     vocabulary: tuple[str, ...] = ()
-    relations: tuple[str, ...] = ()
     # Training: clauses sampled afresh for every state drawn, half of them true.
     batch_size: int = 64
     lr: float = 2e-3

@@ -123,6 +123,11 @@ class Fact:
     def holds(self, state: State) -> bool:
         return RELATIONS[self.relation].truth(state, self.subject, self.other)
 
+    def clear(self, state: State) -> bool:
+        """Is its truth clear of the vague edge of its words (WORDS.vague_m, vague_deg)?"""
+        edge = EDGES.get(self.relation)
+        return edge is None or edge(state, self.subject, self.other)
+
 
 def _tilt(pose: np.ndarray) -> float:
     """Degrees between the body's axis and the vertical."""
@@ -172,6 +177,28 @@ def on_end(s: State, k: int, side: str) -> bool:
     return bool(offset < -WORDS.block_end if side == "left" else offset > WORDS.block_end)
 
 
+def _apart_clear(s: State, k: int, other: int, axis: int) -> bool:
+    if k == other or not (s.standing(k) and s.standing(other)):
+        return True
+    gap = abs(s.poses[other, axis] - s.poses[k, axis])
+    return bool(abs(gap - WORDS.beside) > WORDS.vague_m)
+
+
+def _lies_clear(s: State, k: int, orientation: str) -> bool:
+    if not s.standing(k) or tipped(s, k):
+        return True
+    yaw = _yaw(s.poses[k])
+    off = min(yaw, 180.0 - yaw) if orientation == "across" else abs(yaw - 90.0)
+    return abs(off - WORDS.yaw_tolerance) > WORDS.vague_deg
+
+
+def _on_end_clear(s: State, k: int, side: str) -> bool:
+    b = _block(s)
+    if b is None or not on(s, k, b) or not across(s, b):
+        return True
+    return bool(abs(abs(s.poses[k, 0] - s.poses[b, 0]) - WORDS.block_end) > WORDS.vague_m)
+
+
 def tipped(s: State, k: int) -> bool:
     limit = EFFECTS.block_tip_deg if s.kind(k) == "block" else EFFECTS.topple_deg
     return s.standing(k) and _tilt(s.poses[k]) > limit
@@ -210,4 +237,13 @@ RELATIONS: dict[str, Relation] = {
     "right_of": Relation(PLACED, lambda s, k, o: _apart(s, k, o, 0, -1.0), PLACED),
     "in_front_of": Relation(PLACED, lambda s, k, o: _apart(s, k, o, 1, 1.0), PLACED),
     "behind": Relation(PLACED, lambda s, k, o: _apart(s, k, o, 1, -1.0), PLACED),
+}
+# Where a relation's words are vague: (state, subject, other) -> its truth is clear of the edge.
+EDGES: dict[str, Callable[[State, int, int | str | None], bool]] = {
+    "left_of": lambda s, k, o: _apart_clear(s, k, o, 0),
+    "right_of": lambda s, k, o: _apart_clear(s, k, o, 0),
+    "in_front_of": lambda s, k, o: _apart_clear(s, k, o, 1),
+    "behind": lambda s, k, o: _apart_clear(s, k, o, 1),
+    "lies": _lies_clear,
+    "on_end": _on_end_clear,
 }

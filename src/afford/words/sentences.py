@@ -161,14 +161,15 @@ def _draw_fact(state: State, called: dict[int, tuple[str, ...]], rng: np.random.
 
 
 def sample_clause(state: State, truth: bool, rng: np.random.Generator, called=None) -> Clause | None:
-    """A clause about `state` that is `truth`, or None when TRIES draws found none."""
+    """A clause about `state` that is `truth`, clear of its words' vague edge
+    (`Fact.clear`), or None when TRIES draws found none."""
     called = names(state) if called is None else called
     for _ in range(TRIES):
         fact = _draw_fact(state, called, rng)
         if fact is None:
             continue
         clause = Clause(fact, bool(rng.random() < NEGATED_P))
-        if clause.holds(state) == truth:
+        if clause.holds(state) == truth and fact.clear(state):
             return clause
     return None
 

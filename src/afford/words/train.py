@@ -17,7 +17,6 @@ from afford.training.distributed import World
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.words.config import AgreementConfig
 from afford.words.data import ClauseData, collate_clauses
-from afford.words.facts import RELATIONS
 from afford.words.metrics import roc_auc
 from afford.words.model import AgreementNet
 from afford.words.sentences import vocabulary
@@ -45,7 +44,7 @@ def train(
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
     if not config.vocabulary:
-        config = replace(config, vocabulary=tuple(vocabulary()), relations=tuple(sorted(RELATIONS)))
+        config = replace(config, vocabulary=tuple(vocabulary()))
     data = Dataset(data_dir)
     futures = None if predicted is None else PredictedStates(predicted, data)
     train_set = ClauseData(
@@ -63,20 +62,17 @@ def train(
     )
     val_images, val_texts, val_truths, _ = fixed_draws(ClauseData(data, "val"), VAL_DRAWS, config.seed)
     net = AgreementNet(config)
-    val_ids = net.encode(val_texts)
+    val_ids = net.token_ids(val_texts)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     bce = nn.BCEWithLogitsLoss()
 
     def train_step(batch):
         images, texts, truths, _ = batch
-        return bce(net(images, net.encode(texts)), truths), {}
+        return bce(net(images, net.token_ids(texts)), truths), {}
 
     def validate() -> dict[str, float]:
         logits = torch.cat(
-            [
-                net(val_images[i : i + 128], {k: v[i : i + 128] for k, v in val_ids.items()})
-                for i in range(0, len(val_texts), 128)
-            ]
+            [net(val_images[i : i + 128], val_ids[i : i + 128]) for i in range(0, len(val_ids), 128)]
         )
         return {
             "loss": float(bce(logits, val_truths)),

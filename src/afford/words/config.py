@@ -22,7 +22,7 @@ class AgreementConfig:
     # when training starts, and kept with the weights.
     vocabulary: tuple[str, ...] = ()
     # Training: clauses sampled afresh for every state drawn, half of them true.
-    batch_size: int = 64
+    batch_size: int = 40  # draws; each gives its clause on a second state too, where one is found
     lr: float = 2e-3
     weight_decay: float = 1e-4
     steps: int = 3000

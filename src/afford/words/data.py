@@ -17,7 +17,7 @@ from afford.data.format import Dataset
 from afford.data.predicted import PredictedStates
 from afford.images import to_chw
 from afford.words.facts import RELATIONS, State
-from afford.words.sentences import Clause, names, sample_clause, write
+from afford.words.sentences import Clause, SentenceError, names, parse, sample_clause, write
 
 RELATION_IDS = {r: i for i, r in enumerate(sorted(RELATIONS))}
 
@@ -63,7 +63,10 @@ class ClauseData(TorchDataset):
     def __len__(self) -> int:
         return len(self.items)
 
-    def __getitem__(self, k: int):
+    def __getitem__(self, k: int) -> list[tuple]:
+        """The draw, and the same clause on another state of the sequence where its truth is
+        the other (when one is found): with the same words both true and false, the words
+        alone cannot tell the truth, and the model has to look."""
         i, t = self.items[k]
         state = sequence_state(self.data, i, t)
         image = self.data.sequence(i).image(t) if k < self.real else self.predicted.image(k - self.real)
@@ -71,12 +74,29 @@ class ClauseData(TorchDataset):
         if drawn is None:  # no object it can name: draw another state
             return self[int(self.rng.integers(len(self)))]
         text, truth, relation = drawn
+        out = [self._example(image, text, truth, relation)]
+        seq = self.data.sequence(i)
+        for u in self.rng.permutation(seq.length + 1):
+            if u == t:
+                continue
+            other = sequence_state(self.data, i, int(u))
+            try:
+                clause = parse(text, other).clauses[0]
+            except SentenceError:  # a name that fits no object there
+                continue
+            if clause.fact.clear(other) and clause.holds(other) != truth:
+                out.append(self._example(seq.image(int(u)), text, not truth, relation))
+                break
+        return out
+
+    def _example(self, image: np.ndarray, text: str, truth: bool, relation: str) -> tuple:
         images, _ = augment(image[None], [np.zeros((0, 7), np.float32)], self.config, self.rng)
         return to_chw(images)[0], text, truth, RELATION_IDS[relation]
 
 
 def collate_clauses(batch) -> tuple[torch.Tensor, list[str], torch.Tensor, torch.Tensor]:
-    images, texts, truths, relations = zip(*batch, strict=True)
+    """Every draw's examples (one or two each) as one batch."""
+    images, texts, truths, relations = zip(*(example for draw in batch for example in draw), strict=True)
     return (
         torch.stack(images),
         list(texts),

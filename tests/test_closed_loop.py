@@ -3,13 +3,13 @@
 from dataclasses import dataclass
 
 import numpy as np
+from helpers import bar
 
 from afford.planning.closed_loop import closed_loop, image_gap
 from afford.planning.goal import Goal
 from afford.planning.strategies import search
 from afford.planning.tree import SearchConfig, WorldModel
 from afford.sim.affordance import Affordance, Detection
-from tests.helpers import bar
 
 TARGET = 4  # two steps of +2 from cell 0
 QUIET = SearchConfig(progress=False)

@@ -2,14 +2,15 @@
 
 from html.parser import HTMLParser
 
+from helpers import StepWorld, bar
+from test_closed_loop import Reach, SlipWorld
+
 from afford.planning.closed_loop import closed_loop
 from afford.planning.goal import Goal
 from afford.planning.run import Outcome
 from afford.planning.strategies import search
 from afford.planning.tree import SearchConfig
 from afford.viz.report import report_html
-from tests.helpers import StepWorld, bar
-from tests.test_closed_loop import Reach, SlipWorld
 
 
 class Nodes(HTMLParser):

@@ -16,14 +16,14 @@ from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
 from afford.data.format import Dataset
 from afford.data.predicted import PredictedStates
 from afford.images import to_chw
-from afford.words.facts import RELATIONS, State
+from afford.words.facts import RELATION_NAMES, State
 from afford.words.sentences import Clause, SentenceError, names, parse, sample_clause, write
 
-RELATION_IDS = {r: i for i, r in enumerate(sorted(RELATIONS))}
+RELATION_IDS = {r: i for i, r in enumerate(RELATION_NAMES)}
 
 
-def sequence_state(data: Dataset, index: int, t: int) -> State:
-    seq = data.sequence(index)
+def sequence_state(seq, t: int) -> State:
+    """State t of a format.Sequence, its hidden objects read from its image."""
     return State.in_sequence(seq.poses, seq.held, seq.slots, t, seq.image(t))
 
 
@@ -68,18 +68,18 @@ class ClauseData(TorchDataset):
         the other (when one is found): with the same words both true and false, the words
         alone cannot tell the truth, and the model has to look."""
         i, t = self.items[k]
-        state = sequence_state(self.data, i, t)
-        image = self.data.sequence(i).image(t) if k < self.real else self.predicted.image(k - self.real)
+        seq = self.data.sequence(i)
+        state = sequence_state(seq, t)
+        image = seq.image(t) if k < self.real else self.predicted.image(k - self.real)
         drawn = draw_clause(state, self.rng)
         if drawn is None:  # no object it can name: draw another state
             return self[int(self.rng.integers(len(self)))]
         text, truth, relation = drawn
         out = [self._example(image, text, truth, relation)]
-        seq = self.data.sequence(i)
         for u in self.rng.permutation(seq.length + 1):
             if u == t:
                 continue
-            other = sequence_state(self.data, i, int(u))
+            other = sequence_state(seq, int(u))
             try:
                 clause = parse(text, other).clauses[0]
             except SentenceError:  # a name that fits no object there

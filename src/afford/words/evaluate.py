@@ -16,7 +16,7 @@ import torch
 from afford.data.format import DataError, Dataset
 from afford.data.predicted import PredictedStates
 from afford.words.data import ClauseData, collate_clauses
-from afford.words.facts import RELATIONS
+from afford.words.facts import RELATION_NAMES
 from afford.words.metrics import roc_auc
 from afford.words.model import AgreementNet
 
@@ -42,9 +42,8 @@ def scores(net: AgreementNet, data: ClauseData, picks: list[int], seed: int = 0,
 
 
 def per_relation(logits: np.ndarray, truths: np.ndarray, relations: np.ndarray) -> dict:
-    names = sorted(RELATIONS)
     table = {"all": {"auc": roc_auc(logits, truths), "clauses": len(truths)}}
-    for i, name in enumerate(names):
+    for i, name in enumerate(RELATION_NAMES):
         on = relations == i
         table[name] = {"auc": roc_auc(logits[on], truths[on]), "clauses": int(on.sum())}
     return table

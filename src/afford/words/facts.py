@@ -238,6 +238,8 @@ RELATIONS: dict[str, Relation] = {
     "in_front_of": Relation(PLACED, lambda s, k, o: _apart(s, k, o, 1, 1.0), PLACED),
     "behind": Relation(PLACED, lambda s, k, o: _apart(s, k, o, 1, -1.0), PLACED),
 }
+RELATION_NAMES = tuple(sorted(RELATIONS))  # in the order of their ids (model, evaluation)
+
 # Where a relation's words are vague: (state, subject, other) -> its truth is clear of the edge.
 EDGES: dict[str, Callable[[State, int, int | str | None], bool]] = {
     "left_of": lambda s, k, o: _apart_clear(s, k, o, 0),

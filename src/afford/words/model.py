@@ -94,8 +94,13 @@ class AgreementNet(nn.Module):
 
     def forward(self, images: torch.Tensor, ids: torch.Tensor) -> torch.Tensor:
         """Logits (B,) that clause b (word ids (B, T)) holds in image b (B, C, H, W)."""
+        return self.judge(self.stem(coordinates(images)), ids)
+
+    def judge(self, grid: torch.Tensor, ids: torch.Tensor) -> torch.Tensor:
+        """Logits (B,) of clauses (B, T) on the stem's grids (B, width, h, w): the stem reads an
+        image once however many clauses are asked of it."""
         t = self.encode_text(ids)
-        x = self.stem(coordinates(images))
+        x = grid
         for block in self.blocks:
             x = block(x, t)
         pooled = torch.cat([x.amax((2, 3)), x.mean((2, 3)), t], 1)
@@ -106,7 +111,8 @@ class AgreementNet(nn.Module):
         (differentiable in the images)."""
         clauses = clause_texts(statement)
         ids = self.token_ids(clauses).to(images.device)
+        grid = self.stem(coordinates(images))
         total = images.new_zeros(len(images))
         for c in range(len(clauses)):
-            total = total + nn.functional.logsigmoid(self(images, ids[c : c + 1].expand(len(images), -1)))
+            total = total + nn.functional.logsigmoid(self.judge(grid, ids[c : c + 1].expand(len(images), -1)))
         return total

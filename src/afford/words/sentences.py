@@ -12,13 +12,15 @@ outside the vocabulary, a clause in no known phrasing, or a name that fits no ob
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from afford.errors import UserError
-from afford.words.facts import RELATIONS, Fact, State
+from afford.sim.constants import WORDS
+from afford.words.facts import RELATION_NAMES, RELATIONS, Fact, State
 
 COLOURS = {"cup": "blue", "ball": "red", "support": "black", "block": "yellow"}
 ORDER_WORDS = {2: ("left", "right"), 3: ("left", "middle", "right")}
@@ -112,8 +114,6 @@ def names(state: State) -> dict[int, tuple[str, ...]]:
     """The noun phrases that pick out each object of the state's scene, by slot: an object
     that shares its kind is named only by its place from the left, and only while every one
     of its kind stands on the table, clear of the others' by WORDS.beside."""
-    from afford.sim.constants import WORDS
-
     out: dict[int, tuple[str, ...]] = {}
     kinds: dict[str, list[int]] = {}
     for k in sorted(state.members):
@@ -147,7 +147,7 @@ def _pick(options, rng: np.random.Generator):
 
 
 def _draw_fact(state: State, called: dict[int, tuple[str, ...]], rng: np.random.Generator) -> Fact | None:
-    relation = _pick(sorted(RELATIONS), rng)
+    relation = _pick(RELATION_NAMES, rng)
     r = RELATIONS[relation]
     subjects = [k for k in called if state.kind(k) in r.subjects]
     if not subjects:
@@ -197,14 +197,15 @@ def tokens(text: str) -> list[str]:
     return re.sub(r"[.,!]", " ", text.lower()).split()
 
 
-def vocabulary() -> list[str]:
+@functools.cache
+def vocabulary() -> tuple[str, ...]:
     """Every word a sentence may use, in a fixed order (the model's token ids)."""
     words = {"the", "and", "table", *COLOURS, *COLOURS.values()}
     words |= {w for order in ORDER_WORDS.values() for w in order}
     for true, negated in PHRASINGS.values():
         for p in true + negated:
             words |= set(tokens(p.replace("{x}", "").replace("{y}", "")))
-    return sorted(words)
+    return tuple(sorted(words))
 
 
 _NOUN = r"the(?: \w+)?(?: \w+)? (?:cup|ball|support|block)"

@@ -180,3 +180,13 @@ def test_clauses_at_the_vague_edge_of_their_words_are_not_sampled(scene):
     for _ in range(50):
         c = sample_clause(s, bool(rng.random() < 0.5), rng)
         assert c is None or c.fact.relation not in ("left_of", "right_of") or c.fact.clear(s)
+
+
+def test_no_agreement_model_is_one_clear_error(tmp_path, monkeypatch):
+    import afford.shipped
+    from afford.planning.goal import GoalError
+    from afford.planning.sentence_goal import load_agreement
+
+    monkeypatch.setattr(afford.shipped, "WEIGHTS", tmp_path)
+    with pytest.raises(GoalError, match="afford train goals"):
+        load_agreement(tmp_path / "elsewhere")

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from afford.planning.goal import GoalError
 from afford.words.facts import State
 from afford.words.sentences import Statement
 
@@ -33,6 +34,12 @@ def load_agreement(weights: str | Path | None = None):
     path = Path(weights) / AGREEMENT_FILE if weights else WEIGHTS / AGREEMENT_FILE
     if not path.is_file():
         path = WEIGHTS / AGREEMENT_FILE
+    if not path.is_file():
+        raise GoalError(
+            f"no agreement model for goals in words: the package ships none yet (not good enough to "
+            f"plan with: docs/beyond-the-paper.md#goals-in-words); train one with `afford train goals` "
+            f"and copy its RUN/best.safetensors to {AGREEMENT_FILE} in the --weights folder"
+        )
     return load_net_from_checkpoint(path, "agreement", AgreementConfig, AgreementNet)[0]
 
 

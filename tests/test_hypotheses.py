@@ -118,3 +118,30 @@ def test_a_one_hypothesis_checkpoint_loads_into_k_and_predicts_the_same_at_first
         a = one.rollout(images[:, 0], place_rows(2))
         b = many.rollout(images[:, 0], place_rows(2))  # uniform choice: the first candidate, the copy
     assert torch.allclose(a, b, atol=1e-6)
+
+
+def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the_one_net():
+    """fork=latent: a one-hypothesis checkpoint loads, the first candidate is that net's
+    prediction exactly (its own P^a end), the others start near it from their own copies;
+    the effect label's candidate is the one whose fork learns."""
+    torch.manual_seed(0)
+    one = PredictionNet(TINY)
+    tensors = {f"model.{k}": v for k, v in one.state_dict().items()}
+    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
+    many = PredictionNet(config)
+    load_model_state(many, tensors, "one.safetensors")
+    images, rows = two_outcomes(2), place_rows(2)
+    with torch.no_grad():
+        a = one.rollout(images[:, 0], rows)
+        _, _, candidates, logits, _ = many.rollout_hypotheses(images[:, 0], rows)
+    assert candidates.shape == (2, 1, 2, 4, 128, 128) and logits.shape == (2, 1, 2)
+    assert torch.allclose(a[:, 0], candidates[:, 0, 0], atol=1e-6)
+    assert 0 < (candidates[:, 0, 1] - candidates[:, 0, 0]).abs().max() < 0.1
+    effects = torch.zeros((2, 1, 128, 128), dtype=torch.bool)
+    effects[1, 0, :3, :3] = True  # the second run had a side effect: the second candidate's
+    loss = sequence_loss(many, images, rows, torch.ones(2, dtype=torch.long), effects)
+    loss.backward()
+    place = many.modules_by_type[1]
+    assert place.forks[0].out.weight.grad.abs().sum() > 0
+    with pytest.raises(ValueError, match="fork"):
+        PredictionNet(replace(TINY, hypotheses=2, fork="encoder"))

@@ -98,6 +98,11 @@ class PredictionConfig:
     # (K = 2), chosen by the step's label (data/effects.py): the first draws canonical steps,
     # the second steps with a side effect, and the head learns how likely a side effect is.
     hypotheses_by: str = "winner"
+    # Where the candidates part (model.FORKS): "decoder", they share E, P^a and D but D's last
+    # layer (one latent, K images drawn from it); "latent", each P^a's last block and output
+    # layer are repeated per candidate, so each outcome has its own dc and D decodes each: the
+    # latent itself forks, and the candidate carried on gives eq. (2) its dc.
+    fork: str = "decoder"
 
     @property
     def latent_size(self) -> int:

@@ -75,6 +75,10 @@ def winners(candidates: torch.Tensor, differences: torch.Tensor, image: torch.Te
     return ((errors * changed).sum((2, 3)) / changed.sum((2, 3))).argmin(1)
 
 
+# Where K candidate outcomes part (config.fork): in D's last layer, or in P^a's last block.
+FORKS = ("decoder", "latent")
+
+
 class PredictionNet(nn.Module):
     def __init__(self, config: PredictionConfig):
         super().__init__()
@@ -87,6 +91,8 @@ class PredictionNet(nn.Module):
             raise ValueError("hypotheses: 1, or more with the spatial architecture")
         if config.hypotheses_by not in ("winner", "effect"):
             raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {config.hypotheses_by!r}")
+        if config.fork not in FORKS:
+            raise ValueError(f"fork: one of {', '.join(FORKS)}, not {config.fork!r}")
         if config.hypotheses_by == "effect" and config.hypotheses != 2:
             raise ValueError("hypotheses_by=effect needs hypotheses=2: a canonical and a side-effect outcome")
         encoder, p_module, decoder = ARCHITECTURES[config.architecture]
@@ -150,14 +156,17 @@ class PredictionNet(nn.Module):
                 memory_out = memory.new_zeros((len(rows), *m.shape[1:]))
             dc = dc.index_copy(0, idx, d)
             memory_out = memory_out.index_copy(0, idx, m)
-        next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
-        difference = self.decoder(dc, image)
         k = self.config.hypotheses
         if k == 1:
+            difference = self.decoder(dc, image)
+            next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
             return next_latent, memory_out, apply_difference(image, difference), difference, None  # eq. (3)
         b = len(image)
+        repeated = image.repeat_interleave(k, 0)
+        forked = dc.dim() == 5  # (B, K, C, h, w): each candidate its own dc
+        difference = self.decoder(dc.flatten(0, 1), repeated) if forked else self.decoder(dc, image)
         differences = difference.view(b, k, -1, *difference.shape[-2:])
-        candidates = apply_difference(image.repeat_interleave(k, 0), differences.flatten(0, 1))  # eq. (3)
+        candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)
         candidates = candidates.view(b, k, *image.shape[1:])
         logits = self.decoder.choice_logits(dc)
         if label is not None:
@@ -167,6 +176,9 @@ class PredictionNet(nn.Module):
         else:
             picked = logits.argmax(1)
         at = torch.arange(b, device=image.device)
+        if forked:  # the candidate carried on gives eq. (2) its dc and the next step its memory
+            dc, memory_out = dc[at, picked], memory_out[at, picked]
+        next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
         return (
             next_latent,
             memory_out,
@@ -184,13 +196,23 @@ class PredictionNet(nn.Module):
         if k == 1 or "decoder.choice.weight" in state:
             return state
         state = dict(state)
+
+        def near(w: torch.Tensor) -> torch.Tensor:  # a copy a little apart (a lone value: exact)
+            return w + 0.01 * w.std() * torch.randn_like(w) if w.numel() > 1 else w.clone()
+
         for name in ("decoder.out.weight", "decoder.out.bias"):
             if name in state and state[name].shape[0] * k == own[name].shape[0]:
-                copies = [state[name]] + [
-                    state[name] + 0.01 * state[name].std() * torch.randn_like(state[name])
-                    for _ in range(k - 1)
-                ]
-                state[name] = torch.cat(copies, 0)
+                state[name] = torch.cat([state[name]] + [near(state[name]) for _ in range(k - 1)], 0)
+        # Forked in the latent: each fork starts as a copy of its P^a's last block and output layer.
+        last = f"blocks.{self.config.p_blocks - 1}."
+        for name in own:
+            head, sep, tail = name.partition(".forks.")
+            if not sep:
+                continue
+            part = tail.split(".", 1)[1]  # "block.conv1.weight" or "out.bias"
+            source = f"{head}.{last}{part[len('block.'):]}" if part.startswith("block.") else f"{head}.{part}"
+            if source in state:
+                state[name] = near(state[source])
         for name in ("decoder.choice.weight", "decoder.choice.bias"):
             state[name] = own[name]
         return state

@@ -134,8 +134,31 @@ class Block(nn.Module):
         return h + self.conv2(x)
 
 
+def _out_conv(c: PredictionConfig) -> nn.Conv2d:
+    out = _conv(c.p_channels, c.latent_channels + c.memory_channels)
+    with torch.no_grad():  # dc starts small: eq. (2) first keeps c
+        out.weight.mul_(0.1)
+        out.bias.zero_()
+    return out
+
+
+class Fork(nn.Module):
+    """Another outcome's own end of P^a (`fork="latent"`): a copy of its last block and its
+    output layer, so each candidate outcome has its own dc, and the latent itself forks."""
+
+    def __init__(self, c: PredictionConfig, act: type[nn.Module]):
+        super().__init__()
+        self.block = Block(c.p_channels, act)
+        self.out = _out_conv(c)
+
+
 class SpatialP(nn.Module):
-    """One affordance type's P^a on the grid: (c_i, m_i, action) -> (dc, m_{i+1})."""
+    """One affordance type's P^a on the grid: (c_i, m_i, action) -> (dc, m_{i+1}).
+
+    With `fork="latent"` and K hypotheses, dc (B, K, ...) and m_{i+1} (B, K, ...): the first
+    outcome through `blocks` and `out` as with one, the others through their `forks`, which
+    branch before the last block.
+    """
 
     def __init__(self, c: PredictionConfig):
         super().__init__()
@@ -146,20 +169,26 @@ class SpatialP(nn.Module):
         self.inp = _conv(c.latent_channels + c.memory_channels + self.action_channels, c.p_channels)
         self.blocks = nn.ModuleList(Block(c.p_channels, act) for _ in range(c.p_blocks))
         self.act = act()
-        self.out = _conv(c.p_channels, c.latent_channels + c.memory_channels)
-        with torch.no_grad():
-            self.out.weight.mul_(0.1)
-            self.out.bias.zero_()
+        self.out = _out_conv(c)
+        forked = c.hypotheses if c.fork == "latent" else 1
+        if forked > 1 and c.p_blocks < 1:
+            raise ValueError("fork=latent branches before P's last block: p_blocks must be at least 1")
+        self.forks = nn.ModuleList(Fork(c, act) for _ in range(forked - 1))
 
     def forward(self, latent: torch.Tensor, memory: torch.Tensor, vector: torch.Tensor, pixel: torch.Tensor):
         maps = action_maps(vector, pixel, self.size, self.sigma)
         blob = maps[:, :1]
         h = self.inp(torch.cat([latent, memory, maps], 1))
-        for block in self.blocks:
+        for block in self.blocks[:-1] if self.forks else self.blocks:
             h = block(h, blob)
-        out = self.out(self.act(h))
-        dc, new_memory = out[:, : self.latent_channels], torch.tanh(out[:, self.latent_channels :])
-        return dc, new_memory
+        if not self.forks:
+            return self._split(self.out(self.act(h)))
+        ends = [(self.blocks[-1], self.out)] + [(f.block, f.out) for f in self.forks]
+        outs = [self._split(out(self.act(block(h, blob)))) for block, out in ends]
+        return torch.stack([o[0] for o in outs], 1), torch.stack([o[1] for o in outs], 1)
+
+    def _split(self, out: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        return out[:, : self.latent_channels], torch.tanh(out[:, self.latent_channels :])
 
 
 class SpatialDecoder(nn.Module):
@@ -183,11 +212,13 @@ class SpatialDecoder(nn.Module):
             raise ValueError("decoder_channels must upsample the latent grid to half the image size")
         self.full = nn.Sequential(_conv(width + 4 * c.channels, c.full_channels), act())
         k = c.hypotheses
-        self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1) * k, 1)
+        # Forked in the latent, D decodes each candidate's own dc: one output per call.
+        drawn = 1 if c.fork == "latent" else k
+        self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1) * drawn, 1)
         with torch.no_grad():
-            self.out.bias.view(k, c.channels + 1, 4)[:, -1] = MASK_BIAS  # pixel_shuffle: channel-major
+            self.out.bias.view(drawn, c.channels + 1, 4)[:, -1] = MASK_BIAS  # pixel_shuffle: channel-major
         if k > 1:  # which candidate is likely, from dc pooled over the grid (mean and max)
-            self.choice = nn.Linear(2 * c.latent_channels, k)
+            self.choice = nn.Linear(2 * c.latent_channels * (k // drawn), k)
             nn.init.zeros_(self.choice.weight)
             nn.init.zeros_(self.choice.bias)
 
@@ -197,5 +228,6 @@ class SpatialDecoder(nn.Module):
         return clamped_tanh(nn.functional.pixel_shuffle(self.out(self.full(x)), 2))
 
     def choice_logits(self, dc: torch.Tensor) -> torch.Tensor:
-        """(B, K): how likely each candidate outcome is (softmax), for K > 1."""
-        return self.choice(torch.cat([dc.mean((2, 3)), dc.amax((2, 3))], 1))
+        """(B, K): how likely each candidate outcome is (softmax), for K > 1; dc (B, C, h, w),
+        or (B, K, C, h, w) forked in the latent (every candidate's dc seen)."""
+        return self.choice(torch.cat([dc.mean((-2, -1)), dc.amax((-2, -1))], -1).flatten(1))

@@ -18,6 +18,15 @@ class AgreementConfig:
     embed: int = 48  # word embedding
     text: int = 96  # the clause encoder's GRU state
     head: int = 128
+    # The readout (model.READOUTS): "pool", the grid's max and mean beside the clause; "attend",
+    # also two clause-chosen attention maps over the grid (what the clause is about, and what
+    # it is compared with), each read as its features and its centre's coordinates, so "left
+    # of" compares two places instead of hoping a pooled channel kept them.
+    readout: str = "pool"
+    # Weight of the stem's object maps (model.AgreementNet.objects): per grid cell, whether a
+    # cup, a ball, a support or the block is centred there (true poses, through the camera),
+    # so that the stem learns to see the objects and where they are, whatever the clause.
+    loss_objects: float = 0.0
     # The words the model reads, in token-id order: filled from words/sentences.vocabulary()
     # when training starts, and kept with the weights.
     vocabulary: tuple[str, ...] = ()
@@ -39,6 +48,7 @@ class AgreementConfig:
 
 PRESETS = {
     "cpu": AgreementConfig(),
+    "cpu-attend": AgreementConfig(readout="attend", loss_objects=1.0),
     "tiny": AgreementConfig(
         stem=(4, 8, 8),
         blocks=1,

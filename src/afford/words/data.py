@@ -16,15 +16,34 @@ from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
 from afford.data.format import Dataset
 from afford.data.predicted import PredictedStates
 from afford.images import to_chw
+from afford.sim import camera
+from afford.sim.constants import KINDS
 from afford.words.facts import RELATION_NAMES, State
 from afford.words.sentences import Clause, SentenceError, names, parse, sample_clause, write
 
 RELATION_IDS = {r: i for i, r in enumerate(RELATION_NAMES)}
+OBJECT_SIGMA = 0.7  # object maps' bump width, in grid cells
 
 
 def sequence_state(seq, t: int) -> State:
     """State t of a format.Sequence, its hidden objects read from its image."""
     return State.in_sequence(seq.poses, seq.held, seq.slots, t, seq.image(t))
+
+
+def object_maps(state: State, size: int, sigma: float = OBJECT_SIGMA) -> np.ndarray:
+    """(len(KINDS), size, size) in [0, 1]: a Gaussian (sigma in cells) where each object the
+    image shows is centred, through the camera, one channel per kind; what the agreement
+    model's stem is taught to see (config.loss_objects)."""
+    maps = np.zeros((len(KINDS), size, size), np.float32)
+    cells = np.arange(size) + 0.5
+    for k in range(len(state.slots)):
+        if not state.present(k) or k in state.hidden:
+            continue
+        col, row = camera.world_to_pixel(state.poses[k][None, :3].astype(float))[0] * (size / camera.SIZE)
+        bump = np.exp(-0.5 * (((cells[None, :] - col) ** 2 + (cells[:, None] - row) ** 2) / sigma**2))
+        channel = KINDS.index(state.kind(k))
+        maps[channel] = np.maximum(maps[channel], bump)
+    return maps
 
 
 def draw_clause(state: State, rng: np.random.Generator) -> tuple[str, bool, str] | None:
@@ -50,6 +69,7 @@ class ClauseData(TorchDataset):
         predicted: PredictedStates | None = None,
         augment_config: AugmentConfig = NO_AUGMENT,
         seed: int = 0,
+        grid: int = 16,
     ):
         self.data = data
         self.items = [(i, t) for i in data.indices(split) for t in range(data.sequence(i).length + 1)]
@@ -58,6 +78,7 @@ class ClauseData(TorchDataset):
         if predicted is not None:
             self.items += [(int(i), int(t)) for i, t in zip(predicted.sequence, predicted.step, strict=True)]
         self.config = augment_config
+        self.grid = grid  # the object maps' size: the agreement model's stem grid
         self.rng = np.random.default_rng(seed)
 
     def __len__(self) -> int:
@@ -75,7 +96,7 @@ class ClauseData(TorchDataset):
         if drawn is None:  # no object it can name: draw another state
             return self[int(self.rng.integers(len(self)))]
         text, truth, relation = drawn
-        out = [self._example(image, text, truth, relation)]
+        out = [self._example(image, text, truth, relation, state)]
         for u in self.rng.permutation(seq.length + 1):
             if u == t:
                 continue
@@ -85,21 +106,25 @@ class ClauseData(TorchDataset):
             except SentenceError:  # a name that fits no object there
                 continue
             if clause.fact.clear(other) and clause.holds(other) != truth:
-                out.append(self._example(seq.image(int(u)), text, not truth, relation))
+                out.append(self._example(seq.image(int(u)), text, not truth, relation, other))
                 break
         return out
 
-    def _example(self, image: np.ndarray, text: str, truth: bool, relation: str) -> tuple:
+    def _example(self, image: np.ndarray, text: str, truth: bool, relation: str, state: State) -> tuple:
+        # A shift of up to a few pixels moves the objects by under half a cell: the maps keep.
         images, _ = augment(image[None], [np.zeros((0, 7), np.float32)], self.config, self.rng)
-        return to_chw(images)[0], text, truth, RELATION_IDS[relation]
+        maps = torch.from_numpy(object_maps(state, self.grid))
+        return to_chw(images)[0], text, truth, RELATION_IDS[relation], maps
 
 
-def collate_clauses(batch) -> tuple[torch.Tensor, list[str], torch.Tensor, torch.Tensor]:
-    """Every draw's examples (one or two each) as one batch."""
-    images, texts, truths, relations = zip(*(example for draw in batch for example in draw), strict=True)
+def collate_clauses(batch) -> tuple[torch.Tensor, list[str], torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Every draw's examples (one or two each) as one batch: images, clause texts, truths,
+    relation ids and object maps."""
+    images, texts, truths, relations, maps = zip(*(example for draw in batch for example in draw), strict=True)
     return (
         torch.stack(images),
         list(texts),
         torch.tensor(truths, dtype=torch.float32),
         torch.tensor(relations),
+        torch.stack(maps),
     )

@@ -34,7 +34,7 @@ def scores(net: AgreementNet, data: ClauseData, picks: list[int], seed: int = 0,
     draws = [k for k in picks for _ in range(DRAWS_PER_STATE)]
     out = ([], [], [])
     for b in tqdm(range(0, len(draws), BATCH), disable=not progress, desc="score", unit="batch", leave=False):
-        images, texts, truths, relations = collate_clauses([data[k] for k in draws[b : b + BATCH]])
+        images, texts, truths, relations, _ = collate_clauses([data[k] for k in draws[b : b + BATCH]])
         out[0].append(net(images, net.token_ids(texts)).numpy())
         out[1].append(truths.numpy())
         out[2].append(relations.numpy())

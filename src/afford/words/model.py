@@ -20,6 +20,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from afford.sim.constants import KINDS
 from afford.words.config import AgreementConfig
 from afford.words.sentences import SentenceError, clause_texts, tokens
 
@@ -47,6 +48,10 @@ class FiLMBlock(nn.Module):
         return x + self.conv2(h)
 
 
+READOUTS = ("pool", "attend")
+ATTENDED = 2  # attention maps of the "attend" readout: the clause's subject and its reference
+
+
 class AgreementNet(nn.Module):
     def __init__(self, config: AgreementConfig):
         super().__init__()
@@ -64,9 +69,15 @@ class AgreementNet(nn.Module):
         layers += [nn.Conv2d(c, config.width, 1)]
         self.stem = nn.Sequential(*layers)
         self.blocks = nn.ModuleList(FiLMBlock(config.width, config.text) for _ in range(config.blocks))
-        self.head = nn.Sequential(
-            nn.Linear(2 * config.width + config.text, config.head), nn.GELU(), nn.Linear(config.head, 1)
-        )
+        if config.readout not in READOUTS:
+            raise ValueError(f"readout: one of {', '.join(READOUTS)}, not {config.readout!r}")
+        features = 2 * config.width + config.text
+        if config.readout == "attend":
+            self.attend = nn.Conv2d(config.width, ATTENDED, 1)
+            features += ATTENDED * (config.width + 2) + 2  # each map's features and centre; their offset
+        self.head = nn.Sequential(nn.Linear(features, config.head), nn.GELU(), nn.Linear(config.head, 1))
+        if config.loss_objects:  # object maps from the stem's grid, a channel per kind (data.object_maps)
+            self.objects = nn.Conv2d(config.width, len(KINDS), 1)
 
     def token_ids(self, clauses: list[str]) -> torch.Tensor:
         """(B, T) word ids of each clause, 0-padded; a word outside the vocabulary is refused."""
@@ -103,8 +114,14 @@ class AgreementNet(nn.Module):
         x = grid
         for block in self.blocks:
             x = block(x, t)
-        pooled = torch.cat([x.amax((2, 3)), x.mean((2, 3)), t], 1)
-        return self.head(pooled)[:, 0]
+        parts = [x.amax((2, 3)), x.mean((2, 3)), t]
+        if self.config.readout == "attend":
+            weights = torch.softmax(self.attend(x).flatten(2), -1)  # (B, ATTENDED, h*w)
+            where = coordinates(x.new_zeros(1, 0, *x.shape[2:])).flatten(2)[0]  # (2, h*w)
+            centres = weights @ where.T  # (B, ATTENDED, 2): column, row in [-1, 1]
+            parts += [(weights @ x.flatten(2).transpose(1, 2)).flatten(1), centres.flatten(1)]
+            parts.append(centres[:, 0] - centres[:, 1])
+        return self.head(torch.cat(parts, 1))[:, 0]
 
     def statement_logprob(self, images: torch.Tensor, statement: str) -> torch.Tensor:
         """(B,) log-probability that every clause of `statement` holds in each image

@@ -210,7 +210,9 @@ class PredictionNet(nn.Module):
             if not sep:
                 continue
             part = tail.split(".", 1)[1]  # "block.conv1.weight" or "out.bias"
-            source = f"{head}.{last}{part[len('block.'):]}" if part.startswith("block.") else f"{head}.{part}"
+            source = (
+                f"{head}.{last}{part[len('block.') :]}" if part.startswith("block.") else f"{head}.{part}"
+            )
             if source in state:
                 state[name] = near(state[source])
         for name in ("decoder.choice.weight", "decoder.choice.bias"):

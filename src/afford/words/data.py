@@ -120,7 +120,8 @@ class ClauseData(TorchDataset):
 def collate_clauses(batch) -> tuple[torch.Tensor, list[str], torch.Tensor, torch.Tensor, torch.Tensor]:
     """Every draw's examples (one or two each) as one batch: images, clause texts, truths,
     relation ids and object maps."""
-    images, texts, truths, relations, maps = zip(*(example for draw in batch for example in draw), strict=True)
+    examples = [example for draw in batch for example in draw]
+    images, texts, truths, relations, maps = zip(*examples, strict=True)
     return (
         torch.stack(images),
         list(texts),

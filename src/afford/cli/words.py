@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from afford.cli.errors import CLIError
+from afford.words.config import PRESETS as AGREEMENT_PRESETS
 
 
 def cmd_train_goals(args) -> int:
@@ -74,7 +75,7 @@ def add_train_parser(tsub) -> None:
     )
     p.add_argument("--data", required=True, metavar="DIR", help="a dataset made by `afford generate`")
     p.add_argument("--out", required=True, metavar="RUN", help="run folder (checkpoints, logs)")
-    p.add_argument("--preset", choices=("cpu", "tiny"), default="cpu")
+    p.add_argument("--preset", choices=tuple(AGREEMENT_PRESETS), default="cpu")
     p.add_argument(
         "--predicted",
         metavar="FILE.npz",

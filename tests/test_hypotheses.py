@@ -61,6 +61,11 @@ def test_effect_labels_pick_the_candidate_and_teach_the_head():
     assert net.decoder.choice.weight.grad.abs().sum() > 0  # the head learns the labels
     with pytest.raises(ValueError, match="hypotheses=2"):
         PredictionNet(replace(TINY, hypotheses=3, hypotheses_by="effect"))
+    # In use the side-effect outcome is carried on where the head gives it more than the cut-off.
+    with torch.no_grad():
+        for cut, expected in ((0.0, 1), (1.0, 0)):
+            net.config = replace(config, effect_threshold=cut)
+            assert net.rollout_hypotheses(images[:, 0], place_rows(4))[4].eq(expected).all()
 
 
 def test_the_winner_is_the_candidate_nearest_the_truth_where_it_changed():

@@ -103,6 +103,10 @@ class PredictionConfig:
     # layer are repeated per candidate, so each outcome has its own dc and D decodes each: the
     # latent itself forks, and the candidate carried on gives eq. (2) its dc.
     fork: str = "decoder"
+    # With hypotheses_by=effect, in use: the side-effect outcome is carried on where the head
+    # gives it more than this probability (0.5: the likelier). A cut-off tuned on val, as the
+    # recognition net's is: a second outcome drawn where none follows costs canonical plans.
+    effect_threshold: float = 0.5
 
     @property
     def latent_size(self) -> int:

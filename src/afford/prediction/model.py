@@ -173,6 +173,8 @@ class PredictionNet(nn.Module):
             picked = label.long()
         elif truth is not None:
             picked = winners(candidates, differences, image, truth)
+        elif self.config.hypotheses_by == "effect":
+            picked = (logits.float().softmax(1)[:, 1] > self.config.effect_threshold).long()
         else:
             picked = logits.argmax(1)
         at = torch.arange(b, device=image.device)

@@ -150,3 +150,25 @@ def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the
     assert place.forks[0].out.weight.grad.abs().sum() > 0
     with pytest.raises(ValueError, match="fork"):
         PredictionNet(replace(TINY, hypotheses=2, fork="encoder"))
+
+
+def test_training_only_the_other_outcomes_keeps_the_first_exactly():
+    from afford.prediction.train import make_optimizer
+
+    torch.manual_seed(0)
+    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="outcomes")
+    net = PredictionNet(config)
+    before = {k: v.clone() for k, v in net.state_dict().items()}
+    opt = make_optimizer(net, config)
+    images, rows = two_outcomes(2), place_rows(2)
+    effects = torch.zeros((2, 1, 128, 128), dtype=torch.bool)
+    effects[1, 0, :3, :3] = True
+    for _ in range(3):
+        loss = sequence_loss(net, images, rows, torch.ones(2, dtype=torch.long), effects)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    moved = {k for k, v in net.state_dict().items() if not torch.equal(v, before[k])}
+    assert moved and all(".forks." in k or k.startswith("decoder.choice.") for k in moved)
+    with pytest.raises(ValueError, match="nothing to train"):
+        make_optimizer(PredictionNet(replace(TINY, trained="outcomes")), replace(TINY, trained="outcomes"))

@@ -107,6 +107,10 @@ class PredictionConfig:
     # gives it more than this probability (0.5: the likelier). A cut-off tuned on val, as the
     # recognition net's is: a second outcome drawn where none follows costs canonical plans.
     effect_threshold: float = 0.5
+    # What training changes (train.TRAINED): "all"; "outcomes", only the other outcomes' own
+    # parts (fork=latent's P^a ends, the choice head), so that fine-tuning a one-outcome net into
+    # two keeps its first outcome exactly: what it foresaw, and the plans it found, stay.
+    trained: str = "all"
 
     @property
     def latent_size(self) -> int:

@@ -150,11 +150,25 @@ def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int
     return share_sampler(np.array(flagged), share, seed, what)
 
 
+# config.trained -> whether a parameter (by name) learns.
+TRAINED = {
+    "all": lambda name: True,
+    "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice."),
+}
+
+
 def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
+    if config.trained not in TRAINED:
+        raise ValueError(f"trained: one of {', '.join(TRAINED)}, not {config.trained!r}")
+    for name, parameter in net.named_parameters():  # the rest is fixed: no gradient is kept
+        parameter.requires_grad_(TRAINED[config.trained](name))
+    params = [p for p in net.parameters() if p.requires_grad]
+    if not params:
+        raise ValueError(f"trained={config.trained!r} leaves nothing to train in this net (fork=latent?)")
     if config.optimizer == "signsgd":
-        return SignSGD(net.parameters(), lr=config.lr)
+        return SignSGD(params, lr=config.lr)
     if config.optimizer == "adam":
-        return torch.optim.Adam(net.parameters(), lr=config.lr)
+        return torch.optim.Adam(params, lr=config.lr)
     raise ValueError(f"unknown optimizer {config.optimizer!r}; expected signsgd or adam")
 
 
@@ -224,8 +238,8 @@ def train(
         **workers,
     )
     net = PredictionNet(config).to(world.device)
+    opt = make_optimizer(net, config)  # first: it fixes what does not learn, before DDP sees it
     model = wrap(net, world, idle_parameters=True)
-    opt = make_optimizer(net, config)
 
     def train_step(batch):
         loss = sequence_loss(model, *to_device(batch, world.device))

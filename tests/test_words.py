@@ -211,3 +211,22 @@ def test_object_maps_mark_each_kind_where_the_camera_sees_it(scene):
     ball = s.slots.index("ball0")
     hidden = State(s.poses, s.held, s.slots, s.members, frozenset({ball}))
     assert object_maps(hidden, 16)[KINDS.index("ball")].max() == 0  # not seen: not drawn
+
+
+def test_the_shipped_agreement_model_ranks_the_state_a_sentence_describes_first(scene):
+    """A hand-made pair: a cup on the block's left end, and the same cup on the table."""
+    import torch
+
+    from afford.images import to_chw
+    from afford.planning.sentence_goal import load_agreement
+
+    net = load_agreement()
+    images = []
+    for cup in (O.upright("cup", -0.09, 0.30, z=BLOCK_TOP_ON_TABLE), O.upright("cup", 0.12, 0.22)):
+        scene.reset([O.upright("block", 0, 0.30), cup, O.upright("ball", 0.1, 0.38)])
+        images.append(scene.observe())
+    states = to_chw(np.stack(images).astype(np.float32))
+    with torch.no_grad():
+        on_block = net.statement_logprob(states, "the cup is on the block")
+        on_table = net.statement_logprob(states, "the cup is on the table and the ball is on the table")
+    assert on_block[0] > on_block[1] and on_table[1] > on_table[0]

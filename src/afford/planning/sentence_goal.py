@@ -36,9 +36,9 @@ def load_agreement(weights: str | Path | None = None):
         path = WEIGHTS / AGREEMENT_FILE
     if not path.is_file():
         raise GoalError(
-            f"no agreement model for goals in words: the package ships none yet (not good enough to "
-            f"plan with: docs/beyond-the-paper.md#goals-in-words); train one with `afford train goals` "
-            f"and copy its RUN/best.safetensors to {AGREEMENT_FILE} in the --weights folder"
+            f"no agreement model for goals in words: neither the --weights folder nor the package holds "
+            f"{AGREEMENT_FILE}; train one with `afford train goals` and copy its RUN/best.safetensors "
+            f"there as {AGREEMENT_FILE}"
         )
     return load_net_from_checkpoint(path, "agreement", AgreementConfig, AgreementNet)[0]
 

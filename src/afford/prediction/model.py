@@ -163,7 +163,7 @@ class PredictionNet(nn.Module):
             return next_latent, memory_out, apply_difference(image, difference), difference, None  # eq. (3)
         b = len(image)
         repeated = image.repeat_interleave(k, 0)
-        forked = dc.dim() == 5  # (B, K, C, h, w): each candidate its own dc
+        forked = self.config.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
         difference = self.decoder(dc.flatten(0, 1), repeated) if forked else self.decoder(dc, image)
         differences = difference.view(b, k, -1, *difference.shape[-2:])
         candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)

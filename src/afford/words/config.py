@@ -45,6 +45,11 @@ class AgreementConfig:
     threads: int = 2
     seed: int = 0
 
+    @property
+    def grid(self) -> int:
+        """The stem's grid size: one cell per 2^len(stem) pixels."""
+        return self.image_size // 2 ** len(self.stem)
+
 
 PRESETS = {
     # The shipped model's: measured best (docs/beyond-the-paper.md, goals in words), 39 min on 2 cores.

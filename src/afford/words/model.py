@@ -25,12 +25,17 @@ from afford.words.config import AgreementConfig
 from afford.words.sentences import SentenceError, clause_texts, tokens
 
 
+def grid_coordinates(x: torch.Tensor) -> torch.Tensor:
+    """(2, H, W) for x (..., H, W): each cell's column and row in [-1, 1]."""
+    h, w = x.shape[-2:]
+    cols = torch.linspace(-1, 1, w, device=x.device, dtype=x.dtype).expand(h, w)
+    rows = torch.linspace(-1, 1, h, device=x.device, dtype=x.dtype)[:, None].expand(h, w)
+    return torch.stack([cols, rows])
+
+
 def coordinates(x: torch.Tensor) -> torch.Tensor:
     """x (B, C, H, W) with two channels more: column and row in [-1, 1]."""
-    b, _, h, w = x.shape
-    cols = torch.linspace(-1, 1, w, device=x.device, dtype=x.dtype).expand(b, 1, h, w)
-    rows = torch.linspace(-1, 1, h, device=x.device, dtype=x.dtype)[:, None].expand(b, 1, h, w)
-    return torch.cat([x, cols, rows], 1)
+    return torch.cat([x, grid_coordinates(x).expand(len(x), -1, -1, -1)], 1)
 
 
 class FiLMBlock(nn.Module):
@@ -105,7 +110,11 @@ class AgreementNet(nn.Module):
 
     def forward(self, images: torch.Tensor, ids: torch.Tensor) -> torch.Tensor:
         """Logits (B,) that clause b (word ids (B, T)) holds in image b (B, C, H, W)."""
-        return self.judge(self.stem(coordinates(images)), ids)
+        return self.judge(self.read(images), ids)
+
+    def read(self, images: torch.Tensor) -> torch.Tensor:
+        """The stem's grid (B, width, h, w) of images (B, C, H, W): read once, judged per clause."""
+        return self.stem(coordinates(images))
 
     def judge(self, grid: torch.Tensor, ids: torch.Tensor) -> torch.Tensor:
         """Logits (B,) of clauses (B, T) on the stem's grids (B, width, h, w): the stem reads an
@@ -117,7 +126,7 @@ class AgreementNet(nn.Module):
         parts = [x.amax((2, 3)), x.mean((2, 3)), t]
         if self.config.readout == "attend":
             weights = torch.softmax(self.attend(x).flatten(2), -1)  # (B, ATTENDED, h*w)
-            where = coordinates(x.new_zeros(1, 0, *x.shape[2:])).flatten(2)[0]  # (2, h*w)
+            where = grid_coordinates(x).flatten(1)  # (2, h*w)
             centres = weights @ where.T  # (B, ATTENDED, 2): column, row in [-1, 1]
             parts += [(weights @ x.flatten(2).transpose(1, 2)).flatten(1), centres.flatten(1)]
             parts.append(centres[:, 0] - centres[:, 1])
@@ -128,7 +137,7 @@ class AgreementNet(nn.Module):
         (differentiable in the images)."""
         clauses = clause_texts(statement)
         ids = self.token_ids(clauses).to(images.device)
-        grid = self.stem(coordinates(images))
+        grid = self.read(images)
         total = images.new_zeros(len(images))
         for c in range(len(clauses)):
             total = total + nn.functional.logsigmoid(self.judge(grid, ids[c : c + 1].expand(len(images), -1)))

@@ -18,7 +18,7 @@ from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.words.config import AgreementConfig
 from afford.words.data import ClauseData, collate_clauses
 from afford.words.metrics import roc_auc
-from afford.words.model import AgreementNet, coordinates
+from afford.words.model import AgreementNet
 from afford.words.sentences import vocabulary
 
 VAL_DRAWS = 512  # clauses of the validation set, drawn once
@@ -47,9 +47,13 @@ def train(
         config = replace(config, vocabulary=tuple(vocabulary()))
     data = Dataset(data_dir)
     futures = None if predicted is None else PredictedStates(predicted, data)
-    grid = config.image_size // 2 ** len(config.stem)
     train_set = ClauseData(
-        data, "train", futures, AugmentConfig(shift_px=config.shift_px, mirror=False), config.seed, grid
+        data,
+        "train",
+        futures,
+        AugmentConfig(shift_px=config.shift_px, mirror=False),
+        config.seed,
+        config.grid,
     )
     sampler = None
     if futures is not None:
@@ -71,7 +75,7 @@ def train(
         images, texts, truths, _, maps = batch
         if not config.loss_objects:
             return bce(net(images, net.token_ids(texts)), truths), {}
-        grid = net.stem(coordinates(images))
+        grid = net.read(images)
         clauses = bce(net.judge(grid, net.token_ids(texts)), truths)
         objects = bce(net.objects(grid), maps)  # the stem taught to see the objects
         return clauses + config.loss_objects * objects, {"clauses": float(clauses), "objects": float(objects)}

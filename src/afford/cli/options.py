@@ -127,6 +127,15 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         f"deviations of it over the members: risk-averse (default {PlannerConfig.risk}); 0: the mean alone",
     )
     parser.add_argument(
+        "--outcomes",
+        choices=("likeliest", "expected"),
+        default=PlannerConfig.outcomes,
+        help="learned and hybrid planners, with a prediction net that foresees two outcomes per step (a "
+        "canonical one and a side effect): likeliest, each step carries on the one its head finds likelier "
+        "(default); expected, both are kept as branches and a plan scores its expected goal loss (eq. 5) "
+        "over them",
+    )
+    parser.add_argument(
         "--closed-loop",
         action="store_true",
         help="plan, execute the first action, look at the real state, plan again with the steps left, "
@@ -203,4 +212,5 @@ def planner_config(args, progress: bool):
         optimise_turns=args.optimise_turns,
         risk=args.risk,
         closed_loop=args.closed_loop,
+        outcomes=args.outcomes,
     )

@@ -30,6 +30,10 @@ class PlannerConfig:
     # Plan, execute the first action, look at the real state, plan again with the steps left
     # (planning/closed_loop.py); False: the paper's open loop, the whole plan executed blind.
     closed_loop: bool = False
+    # The learned planners, with a net that foresees several outcomes per step: "likeliest",
+    # each step carries on the one its head finds likeliest; "expected", every outcome is kept
+    # as a branch and a plan scores its expected eq. (5) (planning/branches.py).
+    outcomes: str = "likeliest"
 
 
 @dataclass

@@ -11,6 +11,7 @@ from functools import partial
 import numpy as np
 
 from afford.errors import UserError
+from afford.planning.branches import BranchingModel
 from afford.planning.closed_loop import Loop, closed_loop
 from afford.planning.hybrid import PROPOSALS, plan_hybrid
 from afford.planning.learned import LearnedModel
@@ -25,6 +26,10 @@ from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
 from afford.sim.perturb import Perturbation, piles, reset_perturbed
 from afford.sim.scene import Scene
+
+# How the learned planners use a net that foresees several outcomes per step (PlannerConfig.outcomes):
+# carry on the likeliest, or keep them all as branches and score the expected eq. (5).
+OUTCOME_MODELS = {"likeliest": LearnedModel, "expected": BranchingModel}
 
 DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
 
@@ -56,6 +61,13 @@ def _nets(learned):
     return learned
 
 
+def _learned_model(image: np.ndarray, learned, config: PlannerConfig) -> LearnedModel:
+    """The learned world model from a start image, keeping the outcomes as `config` asks."""
+    if config.outcomes not in OUTCOME_MODELS:
+        raise UserError(f"outcomes: one of {', '.join(OUTCOME_MODELS)}, not {config.outcomes!r}")
+    return OUTCOME_MODELS[config.outcomes](image, learned.recognizer, learned.predictor)
+
+
 def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     scene.reset(task.scene)
     result = _learned_search(task, scene, config, _nets(learned), task.max_steps)
@@ -64,7 +76,7 @@ def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcom
 
 def _learned_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
     """The learned planner's search from what the camera sees now."""
-    model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
+    model = _learned_model(scene.observe(), learned, config)
     result = search(model, task.goal, steps, config.search)
     if config.optimise_turns:
         from afford.planning.angles import with_optimised_turns
@@ -142,7 +154,7 @@ def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome
     return _solve_hybrid(
         task,
         "hybrid",
-        lambda start: LearnedModel(start, learned.recognizer, learned.predictor),
+        lambda start: _learned_model(start, learned, config),
         scene,
         config,
     )
@@ -216,11 +228,7 @@ def _hybrid_rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
 
     def plan_from(steps: int) -> SearchResult:
         image = scene.observe()
-        model = (
-            OracleModel(scene)
-            if learned is None
-            else LearnedModel(image, learned.recognizer, learned.predictor)
-        )
+        model = OracleModel(scene) if learned is None else _learned_model(image, learned, config)
         rest = [
             p[len(taken) :]
             for p in proposals

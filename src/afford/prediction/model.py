@@ -55,6 +55,17 @@ class Hypotheses:
     picked: torch.Tensor
 
 
+@dataclass
+class Outcomes:
+    """Every outcome of a step (`PredictionNet.step_outcomes`), on a second axis of K: the next
+    latents, memory traces and images (B, K, ...) and the probability of each (B, K)."""
+
+    latent: torch.Tensor
+    memory: torch.Tensor
+    images: torch.Tensor
+    probability: torch.Tensor
+
+
 # Weight of what a candidate would draw (its new values, before eq. (3)'s mask) in choosing the
 # winner: where every candidate's mask is still shut their outputs tie, and the values break
 # the tie by what each would draw once open.
@@ -124,6 +135,62 @@ class PredictionNet(nn.Module):
             -1,
         )
 
+    def _p_step(self, latent, memory, image, rows):
+        """Each example through the P^a of its own type: (dc, next memory trace)."""
+        vector = self.action_vector(rows, image)
+        pixel = world_to_pixel(rows[:, Col.POSITION])
+        types = rows[:, Col.TYPE].long()
+        dc = memory_out = None
+        for t, module in enumerate(self.modules_by_type):
+            idx = torch.nonzero(types == t).flatten()
+            if not len(idx):
+                continue
+            d, m = module(latent[idx], memory[idx], vector[idx], pixel[idx])
+            if dc is None:
+                dc = latent.new_zeros((len(rows), *d.shape[1:]))
+                memory_out = memory.new_zeros((len(rows), *m.shape[1:]))
+            dc = dc.index_copy(0, idx, d)
+            memory_out = memory_out.index_copy(0, idx, m)
+        return dc, memory_out
+
+    def _candidates(self, latent, memory, image, rows):
+        """K > 1: (dc, memory, candidates (B, K, C, H, W), differences (B, K, C+1, H, W),
+        choice logits (B, K)); dc and memory (B, K, ...) when forked in the latent."""
+        dc, memory_out = self._p_step(latent, memory, image, rows)
+        b, k = len(image), self.config.hypotheses
+        repeated = image.repeat_interleave(k, 0)
+        forked = self.config.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
+        difference = self.decoder(dc.flatten(0, 1), repeated) if forked else self.decoder(dc, image)
+        differences = difference.view(b, k, -1, *difference.shape[-2:])
+        candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)
+        return (
+            dc,
+            memory_out,
+            candidates.view(b, k, *image.shape[1:]),
+            differences,
+            self.decoder.choice_logits(dc),
+        )
+
+    def step_outcomes(self, latent, memory, image, rows) -> Outcomes:
+        """Every outcome of one step, each carried on as its own state, with the choice head's
+        probability of each: what a planner that keeps the alternatives (planning/branches.py)
+        grows. One outcome of probability 1 for a one-hypothesis net."""
+        if self.config.hypotheses == 1:
+            latent, memory, image, _, _ = self.step_hypotheses(latent, memory, image, rows)
+            return Outcomes(latent[:, None], memory[:, None], image[:, None], image.new_ones(len(image), 1))
+        dc, memory_out, candidates, _, logits = self._candidates(latent, memory, image, rows)
+        k = self.config.hypotheses
+        if self.config.fork != "latent":  # one dc and memory for every candidate
+            dc = dc[:, None].expand(-1, k, *dc.shape[1:])
+            memory_out = memory_out[:, None].expand(-1, k, *memory_out.shape[1:])
+        next_latent = self.encoder.renormalise((latent[:, None] + dc).flatten(0, 1))  # eq. (2)
+        return Outcomes(
+            next_latent.view(*dc.shape[:2], *next_latent.shape[1:]),
+            memory_out,
+            candidates,
+            logits.float().softmax(1),
+        )
+
     def step_with_difference(self, latent, memory, image, rows):
         """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
         new values and, last, its mask."""
@@ -142,33 +209,14 @@ class PredictionNet(nn.Module):
         the candidate carried on is the one `label` (B,) names where it is given (training by
         effect labels), else the one nearest `truth` where that is given (training's
         winner-takes-all), else the one the choice head finds most likely."""
-        vector = self.action_vector(rows, image)
-        pixel = world_to_pixel(rows[:, Col.POSITION])
-        types = rows[:, Col.TYPE].long()
-        dc = memory_out = None
-        for t, module in enumerate(self.modules_by_type):
-            idx = torch.nonzero(types == t).flatten()
-            if not len(idx):
-                continue
-            d, m = module(latent[idx], memory[idx], vector[idx], pixel[idx])
-            if dc is None:
-                dc = latent.new_zeros((len(rows), *d.shape[1:]))
-                memory_out = memory.new_zeros((len(rows), *m.shape[1:]))
-            dc = dc.index_copy(0, idx, d)
-            memory_out = memory_out.index_copy(0, idx, m)
         k = self.config.hypotheses
         if k == 1:
+            dc, memory_out = self._p_step(latent, memory, image, rows)
             difference = self.decoder(dc, image)
             next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
             return next_latent, memory_out, apply_difference(image, difference), difference, None  # eq. (3)
+        dc, memory_out, candidates, differences, logits = self._candidates(latent, memory, image, rows)
         b = len(image)
-        repeated = image.repeat_interleave(k, 0)
-        forked = self.config.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
-        difference = self.decoder(dc.flatten(0, 1), repeated) if forked else self.decoder(dc, image)
-        differences = difference.view(b, k, -1, *difference.shape[-2:])
-        candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)
-        candidates = candidates.view(b, k, *image.shape[1:])
-        logits = self.decoder.choice_logits(dc)
         if label is not None:
             picked = label.long()
         elif truth is not None:
@@ -178,7 +226,7 @@ class PredictionNet(nn.Module):
         else:
             picked = logits.argmax(1)
         at = torch.arange(b, device=image.device)
-        if forked:  # the candidate carried on gives eq. (2) its dc and the next step its memory
+        if self.config.fork == "latent":  # the candidate carried on gives eq. (2) its dc, and its memory
             dc, memory_out = dc[at, picked], memory_out[at, picked]
         next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
         return (

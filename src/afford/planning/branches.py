@@ -1,0 +1,94 @@
+"""Planning over every outcome the net foresees: a plan scored by its expected eq. (5).
+
+A prediction net with two outcomes per step (a canonical one and a side effect, with a head
+that says how likely each is; prediction/model.py) is used by the learned planner as one:
+each step carries on the likelier outcome, and a side effect the head gives 40% is planned
+as if it never happens. This world model keeps the alternatives instead. Each state of the
+tree is a small set of branches, each with its own latent, memory trace and image and the
+probability of the outcomes that led to it; every action steps every branch, and each branch
+splits into the net's outcomes. A plan then scores the expected eq. (5) over its branches,
+so a plan whose side effect would spoil the goal one time in three pays a third of that, and
+a plan that needs a side effect to happen gets the credit of how likely it is (paper V: "a
+more principled approach" to actions with uncertain outcomes).
+
+Branches less likely than `OUTCOME_FLOOR` are dropped and at most `MOST_BRANCHES` kept per
+state (the likeliest), so a tree costs at most that many times the one-outcome search, and in
+practice little more: most steps' side effects are given a few percent. Recognition runs on
+the likeliest branch's image, which is also the state's picture.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from afford.images import to_chw, to_hwc
+from afford.planning.goal import Goal
+from afford.planning.learned import LearnedModel
+from afford.planning.tree import Node, Scores
+from afford.sim.affordance import encode_affordance
+from afford.sim.affordances import Affordance
+
+OUTCOME_FLOOR = 0.05  # a branch less likely than this is dropped (the rest renormalised)
+MOST_BRANCHES = 4  # the likeliest branches a state keeps
+
+
+@dataclass
+class Branches:
+    """A state's alternatives: their probabilities (n,), summing to 1, likeliest first, and
+    each one's latent, memory trace (n, ...) and image (n, H, W, C)."""
+
+    probability: np.ndarray
+    latent: torch.Tensor
+    memory: torch.Tensor
+    images: np.ndarray
+
+
+def keep(probability: np.ndarray, floor: float = OUTCOME_FLOOR, most: int = MOST_BRANCHES) -> np.ndarray:
+    """The indices of the branches kept, likeliest first: at most `most`, none below `floor`
+    (the likeliest always)."""
+    order = np.argsort(-probability, kind="stable")[:most]
+    return order[(probability[order] >= floor) | (np.arange(len(order)) == 0)]
+
+
+class BranchingModel(LearnedModel):
+    """The learned world model (`LearnedModel`) with every foreseen outcome kept as a branch."""
+
+    @torch.no_grad()
+    def root(self):
+        image, state = super().root()
+        return image, Branches(np.ones(1), state.latent[None], state.memory[None], image[None])
+
+    @torch.no_grad()
+    def predict(self, parents: list[Node], actions: list[Affordance]):
+        owner = np.concatenate([np.full(len(p.state.probability), k) for k, p in enumerate(parents)])
+        rows = torch.from_numpy(np.stack([encode_affordance(actions[k]) for k in owner]))
+        latent = torch.cat([p.state.latent for p in parents])
+        memory = torch.cat([p.state.memory for p in parents])
+        image = to_chw(np.concatenate([p.state.images for p in parents]))
+        out = self.net.step_outcomes(latent, memory, image, rows)
+        self.p_steps += len(owner)
+        prior = np.concatenate([p.state.probability for p in parents])
+        probability = (prior[:, None] * out.probability.numpy()).reshape(-1)  # (branches * K,)
+        k = out.probability.shape[1]
+        latent, memory = out.latent.flatten(0, 1), out.memory.flatten(0, 1)
+        images = to_hwc(out.images.flatten(0, 1))
+        owner = np.repeat(owner, k)
+        children = []
+        for j in range(len(parents)):
+            mine = np.flatnonzero(owner == j)
+            kept = mine[keep(probability[mine] / probability[mine].sum())]
+            p = probability[kept] / probability[kept].sum()
+            at = torch.from_numpy(kept)
+            children.append((images[kept[0]], Branches(p, latent[at], memory[at], images[kept])))
+        return children
+
+    def score(self, goal: Goal, nodes: list[Node]) -> Scores:
+        """Each state's expected eq. (5) over its branches."""
+        losses = goal.loss(np.concatenate([n.state.images for n in nodes]))
+        sizes = np.array([len(n.state.probability) for n in nodes])
+        ends = np.cumsum(sizes)
+        spans = zip(nodes, ends - sizes, ends, strict=True)
+        return Scores(np.array([n.state.probability @ losses[a:b] for n, a, b in spans]))

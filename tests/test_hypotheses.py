@@ -169,6 +169,37 @@ def test_training_only_the_other_outcomes_keeps_the_first_exactly():
         loss.backward()
         opt.step()
     moved = {k for k, v in net.state_dict().items() if not torch.equal(v, before[k])}
-    assert moved and all(".forks." in k or k.startswith("decoder.choice.") for k in moved)
+    assert moved and all(".forks." in k or k.startswith("decoder.choice") for k in moved)
     with pytest.raises(ValueError, match="nothing to train"):
         make_optimizer(PredictionNet(replace(TINY, trained="outcomes")), replace(TINY, trained="outcomes"))
+
+
+def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
+    """choice_head=grid: a two-outcome checkpoint with the pooled head loads with the new head
+    as initialised (uniform) and every outcome as it was; trained=head moves the head alone."""
+    from afford.prediction.train import make_optimizer
+
+    torch.manual_seed(0)
+    pooled = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
+    old = PredictionNet(pooled)
+    tensors = {f"model.{k}": v for k, v in old.state_dict().items()}
+    config = replace(pooled, choice_head="grid", choice_channels=4, trained="head")
+    net = PredictionNet(config)
+    load_model_state(net, tensors, "pooled.safetensors")
+    images, rows = two_outcomes(2), place_rows(2)
+    with torch.no_grad():
+        a = old.rollout_hypotheses(images[:, 0], rows)[2]
+        b, logits = net.rollout_hypotheses(images[:, 0], rows)[2:4]
+    assert torch.equal(a, b) and torch.equal(logits, torch.zeros_like(logits))
+    before = {k: v.clone() for k, v in net.state_dict().items()}
+    opt = make_optimizer(net, config)
+    effects = torch.zeros((2, 1, 128, 128), dtype=torch.bool)
+    effects[1, 0, :3, :3] = True
+    for _ in range(3):
+        loss = sequence_loss(net, images, rows, torch.ones(2, dtype=torch.long), effects)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    moved = {k for k, v in net.state_dict().items() if not torch.equal(v, before[k])}
+    assert moved and all(k.startswith("decoder.choice") for k in moved)
+    assert any(k.startswith("decoder.choice_grid") for k in moved)

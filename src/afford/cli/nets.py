@@ -101,6 +101,12 @@ def cmd_eval(args) -> int:
         if not args.no_futures:
             recognizer = load_nets(args.recognition).recognizer
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
+        if "choice_head" in result:  # a two-outcome net: its head's calibration, for `afford export`
+            from afford.prediction.calibration import CALIBRATION_FILE, format_calibration
+
+            (folder / CALIBRATION_FILE).write_text(json.dumps(result["choice_head"], indent=2) + "\n")
+            if not args.json:
+                print(format_calibration(result["choice_head"]))
     _report(args, result, folder, *EVALS[args.net], format_table(result))
     return 0
 
@@ -145,10 +151,12 @@ def _check_run(run: str) -> None:
 
 
 def cmd_export(args) -> int:
-    """Ship a trained pair: weights only, the tuned cut-off inside. The prediction net goes in
+    """Ship a trained pair: weights only, the tuned cut-off inside (and a two-outcome prediction
+    net's head calibration, RUN/calibration.json, in its config). The prediction net goes in
     float16 (half the size, the same predictions to the eye); the recognition net stays in
     float32, since float16 moved detections across the cut-off (one of 797 on the train
     states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
+    from afford.prediction.calibration import read_calibration
     from afford.prediction.ensemble import MEMBERS_DIR
     from afford.recognition.infer import read_threshold
     from afford.shipped import PREDICTION_FILE, RECOGNITION_FILE
@@ -165,7 +173,9 @@ def cmd_export(args) -> int:
         RECOGNITION_FILE: export_weights(
             rec_run / args.checkpoint, out / RECOGNITION_FILE, "recognition", half=False, extra=extra
         ),
-        PREDICTION_FILE: export_weights(pred_run / args.checkpoint, out / PREDICTION_FILE, "prediction"),
+        PREDICTION_FILE: export_weights(
+            pred_run / args.checkpoint, out / PREDICTION_FILE, "prediction", config=read_calibration(pred_run)
+        ),
     }
     for k, run in enumerate(members, start=1):
         name = f"{MEMBERS_DIR}/prediction-{k}.safetensors"

@@ -33,6 +33,7 @@ from afford.sim.affordances import Affordance
 
 OUTCOME_FLOOR = 0.05  # a branch less likely than this is dropped (the rest renormalised)
 MOST_BRANCHES = 4  # the likeliest branches a state keeps
+CHUNK = 256  # branches stepped in one call of the net
 
 
 @dataclass
@@ -68,13 +69,18 @@ class BranchingModel(LearnedModel):
         latent = torch.cat([p.state.latent for p in parents])
         memory = torch.cat([p.state.memory for p in parents])
         image = to_chw(np.concatenate([p.state.images for p in parents]))
-        out = self.net.step_outcomes(latent, memory, image, rows)
+        parts = [
+            self.net.step_outcomes(latent[at], memory[at], image[at], rows[at])
+            for at in torch.arange(len(rows)).split(CHUNK)
+        ]  # in chunks: every parent may bring several branches, each drawn K times
         self.p_steps += len(owner)
         prior = np.concatenate([p.state.probability for p in parents])
-        probability = (prior[:, None] * out.probability.numpy()).reshape(-1)  # (branches * K,)
-        k = out.probability.shape[1]
-        latent, memory = out.latent.flatten(0, 1), out.memory.flatten(0, 1)
-        images = to_hwc(out.images.flatten(0, 1))
+        drawn = torch.cat([o.probability for o in parts]).numpy()
+        probability = (prior[:, None] * drawn).reshape(-1)  # (branches * K,)
+        k = drawn.shape[1]
+        latent = torch.cat([o.latent for o in parts]).flatten(0, 1)
+        memory = torch.cat([o.memory for o in parts]).flatten(0, 1)
+        images = np.concatenate([to_hwc(o.images.flatten(0, 1)) for o in parts])
         owner = np.repeat(owner, k)
         children = []
         for j in range(len(parents)):

@@ -113,6 +113,10 @@ def evaluate(
         result[split] = table(errors(net, data, split, limit)[0])
         result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
     result["foresight"] = foresight.measure(net.rollout, data, "test").as_dict()
+    if config.hypotheses == 2 and config.hypotheses_by == "effect":
+        from afford.prediction.calibration import calibrate
+
+        result["choice_head"] = calibrate(net, data)
     if recognizer is not None:
         from afford.prediction.futures import future_recall, net_predictor
 

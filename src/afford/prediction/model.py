@@ -168,7 +168,7 @@ class PredictionNet(nn.Module):
             memory_out,
             candidates.view(b, k, *image.shape[1:]),
             differences,
-            self.decoder.choice_logits(dc),
+            self.decoder.choice_logits(dc, latent),
         )
 
     def step_outcomes(self, latent, memory, image, rows) -> Outcomes:
@@ -188,8 +188,18 @@ class PredictionNet(nn.Module):
             next_latent.view(*dc.shape[:2], *next_latent.shape[1:]),
             memory_out,
             candidates,
-            logits.float().softmax(1),
+            self.probabilities(logits),
         )
+
+    def probabilities(self, logits: torch.Tensor) -> torch.Tensor:
+        """(B, K) how likely each outcome is, from the choice head's logits: by effect, the
+        side effect's logit read through the config's calibration; else their softmax."""
+        logits = logits.float()
+        if self.config.hypotheses_by != "effect":
+            return logits.softmax(1)
+        c = self.config
+        side = torch.sigmoid(c.choice_scale * (logits[:, 1] - logits[:, 0]) + c.choice_bias)
+        return torch.stack([1 - side, side], 1)
 
     def step_with_difference(self, latent, memory, image, rows):
         """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
@@ -222,7 +232,7 @@ class PredictionNet(nn.Module):
         elif truth is not None:
             picked = winners(candidates, differences, image, truth)
         elif self.config.hypotheses_by == "effect":
-            picked = (logits.float().softmax(1)[:, 1] > self.config.effect_threshold).long()
+            picked = (self.probabilities(logits)[:, 1] > self.config.effect_threshold).long()
         else:
             picked = logits.argmax(1)
         at = torch.arange(b, device=image.device)
@@ -243,9 +253,15 @@ class PredictionNet(nn.Module):
         winner-takes-all can tell them apart, and the choice head as initialised (uniform)."""
         k = self.config.hypotheses
         own = self.state_dict()
-        if k == 1 or "decoder.choice.weight" in state:
+        if k == 1:
             return state
         state = dict(state)
+        if "decoder.choice.weight" in state:  # already K outcomes: a head of another design starts anew
+            head = [n for n in set(own) | set(state) if n.startswith("decoder.choice")]
+            if any(n not in state or n not in own or state[n].shape != own[n].shape for n in head):
+                state = {n: v for n, v in state.items() if not n.startswith("decoder.choice")}
+                state.update({n: own[n] for n in head if n in own})
+            return state
 
         def near(w: torch.Tensor) -> torch.Tensor:  # a copy a little apart (a lone value: exact)
             return w + 0.01 * w.std() * torch.randn_like(w) if w.numel() > 1 else w.clone()
@@ -265,8 +281,9 @@ class PredictionNet(nn.Module):
             )
             if source in state:
                 state[name] = near(state[source])
-        for name in ("decoder.choice.weight", "decoder.choice.bias"):
-            state[name] = own[name]
+        for name in own:
+            if name.startswith("decoder.choice"):
+                state[name] = own[name]
         return state
 
     def step(self, latent, memory, image, rows):

@@ -35,6 +35,10 @@ from afford.sim.camera import SIZE
 # fully closed, or neither the mask nor the difference would get a gradient.
 MASK_BIAS = 0.1
 
+# The choice head's designs (config.choice_head): a linear map of each candidate's dc pooled over
+# the grid; or convolutions over the grid, on the scene's latent beside each dc, then pooled.
+CHOICE_HEADS = ("pooled", "grid")
+
 ACTIVATIONS = {"tanh": nn.Tanh, "gelu": nn.GELU, "silu": nn.SiLU}
 
 # Channels of the action maps: blob, blob*(cos a, sin a, cos 2a, sin 2a, turn, z), blob*RGBD.
@@ -217,8 +221,16 @@ class SpatialDecoder(nn.Module):
         self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1) * drawn, 1)
         with torch.no_grad():
             self.out.bias.view(drawn, c.channels + 1, 4)[:, -1] = MASK_BIAS  # pixel_shuffle: channel-major
-        if k > 1:  # which candidate is likely, from dc pooled over the grid (mean and max)
-            self.choice = nn.Linear(2 * c.latent_channels * (k // drawn), k)
+        if k > 1:  # which candidate is likely, from features pooled over the grid (mean and max)
+            if c.choice_head not in CHOICE_HEADS:
+                raise ValueError(f"choice_head: one of {', '.join(CHOICE_HEADS)}, not {c.choice_head!r}")
+            self.on_grid = c.choice_head == "grid"
+            pooled = c.latent_channels
+            if self.on_grid:  # convolutions over the scene's latent beside each candidate's dc first
+                w = c.choice_channels
+                self.choice_grid = nn.Sequential(_conv(2 * c.latent_channels, w), act(), _conv(w, w), act())
+                pooled = w
+            self.choice = nn.Linear(2 * pooled * (k // drawn), k)
             nn.init.zeros_(self.choice.weight)
             nn.init.zeros_(self.choice.bias)
 
@@ -227,7 +239,14 @@ class SpatialDecoder(nn.Module):
         x = torch.cat([self.up(dc), nn.functional.pixel_unshuffle(image, 2)], 1)
         return clamped_tanh(nn.functional.pixel_shuffle(self.out(self.full(x)), 2))
 
-    def choice_logits(self, dc: torch.Tensor) -> torch.Tensor:
+    def choice_logits(self, dc: torch.Tensor, latent: torch.Tensor) -> torch.Tensor:
         """(B, K): how likely each candidate outcome is (softmax), for K > 1; dc (B, C, h, w),
-        or (B, K, C, h, w) forked in the latent (every candidate's dc seen)."""
-        return self.choice(torch.cat([dc.mean((-2, -1)), dc.amax((-2, -1))], -1).flatten(1))
+        or (B, K, C, h, w) forked in the latent (every candidate's dc seen); latent (B, C, h,
+        w): the state the step starts from (c_i), read by the "grid" head."""
+        x = dc
+        if self.on_grid:
+            forked = dc.dim() == 5
+            scene = latent.repeat_interleave(dc.shape[1], 0) if forked else latent
+            x = self.choice_grid(torch.cat([scene, dc.flatten(0, 1) if forked else dc], 1))
+            x = x.view(*dc.shape[:-3], *x.shape[1:])
+        return self.choice(torch.cat([x.mean((-2, -1)), x.amax((-2, -1))], -1).flatten(1))

@@ -153,7 +153,8 @@ def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int
 # config.trained -> whether a parameter (by name) learns.
 TRAINED = {
     "all": lambda name: True,
-    "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice."),
+    "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice"),
+    "head": lambda name: name.startswith("decoder.choice"),
 }
 
 

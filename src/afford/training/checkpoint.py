@@ -113,13 +113,21 @@ def load_optimizer_state(
 
 
 def export_weights(
-    src: str | Path, dst: str | Path, kind: str, half: bool = True, extra: dict | None = None
+    src: str | Path,
+    dst: str | Path,
+    kind: str,
+    half: bool = True,
+    extra: dict | None = None,
+    config: dict | None = None,
 ) -> int:
     """A checkpoint's weights alone (no optimiser state), float16 by default, for shipping.
 
-    Returns the file size in bytes. `extra` is merged into the metadata (e.g. the tuned cut-off).
+    Returns the file size in bytes. `extra` is merged into the metadata (e.g. the tuned cut-off),
+    `config` into the net's config (values fitted after training, e.g. a head's calibration).
     """
     tensors, meta = read_checkpoint(src, kind)
+    if config:
+        meta = {**meta, "config": {**meta["config"], **config}}
     out = {}
     for k, v in tensors.items():
         if k.startswith("model."):

@@ -78,7 +78,10 @@ def train(
         grid = net.read(images)
         clauses = bce(net.judge(grid, net.token_ids(texts)), truths)
         objects = bce(net.objects(grid), maps)  # the stem taught to see the objects
-        return clauses + config.loss_objects * objects, {"clauses": float(clauses), "objects": float(objects)}
+        return clauses + config.loss_objects * objects, {
+            "clauses": float(clauses.detach()),
+            "objects": float(objects.detach()),
+        }
 
     def validate() -> dict[str, float]:
         logits = torch.cat(

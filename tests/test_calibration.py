@@ -1,0 +1,45 @@
+"""The choice head's calibration (prediction/calibration.py): Platt scaling, applied by the net."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, replace
+
+import numpy as np
+import torch
+
+from afford.prediction.calibration import fit_platt, report
+from afford.prediction.config import PRESETS
+from afford.prediction.evaluate import load_net
+from afford.prediction.model import PredictionNet
+from afford.training.checkpoint import export_weights, save_checkpoint
+
+EFFECT = replace(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
+
+
+def test_platt_scaling_recovers_the_scale_and_bias_the_labels_were_drawn_with():
+    rng = np.random.default_rng(0)
+    z = rng.normal(0, 2, 20_000)
+    labels = rng.random(len(z)) < 1 / (1 + np.exp(-(0.6 * z - 1.5)))
+    scale, bias = fit_platt(z, labels)
+    assert abs(scale - 0.6) < 0.05 and abs(bias + 1.5) < 0.08
+    r = report(z, labels, scale, bias)
+    assert abs(r.mean_calibrated - r.rate) < 0.01 and r.nll_calibrated < r.nll_raw
+
+
+def test_the_net_reads_its_head_through_the_calibration_and_export_keeps_it(tmp_path):
+    logits = torch.tensor([[0.0, 2.0], [1.0, -1.0]])
+    net = PredictionNet(replace(EFFECT, choice_scale=0.5, choice_bias=-1.0))
+    side = net.probabilities(logits)[:, 1]
+    assert torch.allclose(side, torch.sigmoid(torch.tensor([0.0, -2.0])))
+    assert torch.allclose(net.probabilities(logits).sum(1), torch.ones(2))
+    plain = PredictionNet(EFFECT)
+    assert torch.allclose(plain.probabilities(logits), logits.softmax(1))  # uncalibrated: the softmax
+    save_checkpoint(tmp_path / "run" / "best.safetensors", plain, "prediction", asdict(EFFECT), 1)
+    export_weights(
+        tmp_path / "run" / "best.safetensors",
+        tmp_path / "w.safetensors",
+        "prediction",
+        config={"choice_scale": 0.5, "choice_bias": -1.0},
+    )
+    _, config = load_net(tmp_path / "w.safetensors")
+    assert (config.choice_scale, config.choice_bias) == (0.5, -1.0)

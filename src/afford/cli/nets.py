@@ -273,7 +273,9 @@ def add_parsers(sub) -> None:
         description="The paper's Table 2: mean absolute RGBD error per step (1-4) over all pixels and "
         "over the pixels that changed (by more than 0.02, and at all), mean (sd), on test and 500 training "
         "sequences, beside copying the input. Writes Fig. 7-style pictures of canonical and non-canonical "
-        "effects to RUN/predictions/.",
+        "effects to RUN/predictions/. For a net with a side-effect outcome, also its choice head: how "
+        "often it expects a side effect against how often one follows, and Platt scaling fitted on val "
+        "(RUN/calibration.json, which `afford export` puts in the shipped net's config).",
     )
     for q, name in ((r, "recognition"), (p, "prediction")):
         q.add_argument(

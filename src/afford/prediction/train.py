@@ -215,7 +215,12 @@ def train(
             part.indices = [part.indices[k] for k in rng.integers(len(part), size=len(part))]
     train_set = parts[0] if len(parts) == 1 else JoinedData(parts)
     sampler = run_sampler(parts, config, stream)
-    val_set = PredictionData(data, "val", config.max_steps, random_start=False)
+    # Runs labelled by effect are validated by the same labels, so that the best checkpoint is
+    # the one whose head and outcomes learned what training asks, not the one nearest the
+    # winners (which a head trained alone drifts away from).
+    val_set = PredictionData(
+        data, "val", config.max_steps, random_start=False, effect_masks="effects" if by_effect else None
+    )
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)
     # Batches are built in a background process (decoding, augmenting, padding), so the
@@ -247,13 +252,13 @@ def train(
         return loss, {}
 
     def validate() -> dict[str, float]:
-        images, actions, steps = val_batch
+        images, actions, steps = val_batch[:3]
         predicted = net.rollout(images[:, 0], actions, steps)
         mask = step_mask(steps, actions.shape[1])[:, :, None, None]
         abs_err = (predicted - images[:, 1:]).abs().mean(2)  # (B, L, H, W)
         changed = ((images[:, 1:] - images[:, :-1]).abs().amax(2) > CHANGED) * mask
         return {
-            "loss": float(sequence_loss(net, images, actions, steps)),
+            "loss": float(sequence_loss(net, *val_batch)),
             "abs_error": float((abs_err * mask).sum() / (mask.sum() * abs_err[0, 0].numel())),
             "changed_abs_error": float((abs_err * changed).sum() / changed.sum().clamp_min(1)),
         }

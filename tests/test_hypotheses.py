@@ -152,12 +152,10 @@ def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the
         PredictionNet(replace(TINY, hypotheses=2, fork="encoder"))
 
 
-def test_training_only_the_other_outcomes_keeps_the_first_exactly():
+def _moved_by_training(net: PredictionNet, config) -> set[str]:
+    """The weights that three training steps (the second run with a side effect) change."""
     from afford.prediction.train import make_optimizer
 
-    torch.manual_seed(0)
-    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="outcomes")
-    net = PredictionNet(config)
     before = {k: v.clone() for k, v in net.state_dict().items()}
     opt = make_optimizer(net, config)
     images, rows = two_outcomes(2), place_rows(2)
@@ -168,7 +166,16 @@ def test_training_only_the_other_outcomes_keeps_the_first_exactly():
         opt.zero_grad()
         loss.backward()
         opt.step()
-    moved = {k for k, v in net.state_dict().items() if not torch.equal(v, before[k])}
+    return {k for k, v in net.state_dict().items() if not torch.equal(v, before[k])}
+
+
+def test_training_only_the_other_outcomes_keeps_the_first_exactly():
+    from afford.prediction.train import make_optimizer
+
+    torch.manual_seed(0)
+    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="outcomes")
+    net = PredictionNet(config)
+    moved = _moved_by_training(net, config)
     assert moved and all(".forks." in k or k.startswith("decoder.choice") for k in moved)
     with pytest.raises(ValueError, match="nothing to train"):
         make_optimizer(PredictionNet(replace(TINY, trained="outcomes")), replace(TINY, trained="outcomes"))
@@ -177,8 +184,6 @@ def test_training_only_the_other_outcomes_keeps_the_first_exactly():
 def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
     """choice_head=grid: a two-outcome checkpoint with the pooled head loads with the new head
     as initialised (uniform) and every outcome as it was; trained=head moves the head alone."""
-    from afford.prediction.train import make_optimizer
-
     torch.manual_seed(0)
     pooled = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
     old = PredictionNet(pooled)
@@ -191,15 +196,6 @@ def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
         a = old.rollout_hypotheses(images[:, 0], rows)[2]
         b, logits = net.rollout_hypotheses(images[:, 0], rows)[2:4]
     assert torch.equal(a, b) and torch.equal(logits, torch.zeros_like(logits))
-    before = {k: v.clone() for k, v in net.state_dict().items()}
-    opt = make_optimizer(net, config)
-    effects = torch.zeros((2, 1, 128, 128), dtype=torch.bool)
-    effects[1, 0, :3, :3] = True
-    for _ in range(3):
-        loss = sequence_loss(net, images, rows, torch.ones(2, dtype=torch.long), effects)
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-    moved = {k for k, v in net.state_dict().items() if not torch.equal(v, before[k])}
+    moved = _moved_by_training(net, config)
     assert moved and all(k.startswith("decoder.choice") for k in moved)
     assert any(k.startswith("decoder.choice_grid") for k in moved)

@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from afford.data import effects as fx
 from afford.data.format import Dataset
 from afford.images import to_chw
+from afford.prediction.foresight import execution_batches
 from afford.prediction.model import PredictionNet
 from afford.words.metrics import roc_auc
 
@@ -53,27 +53,12 @@ def head_logits(net: PredictionNet, data: Dataset, split: str, limit: int | None
     side effect followed."""
     z: list[float] = []
     labels: list[bool] = []
-    images: list[np.ndarray] = []
-    actions: list[np.ndarray] = []
-
-    def flush() -> None:
-        logits = net.rollout_hypotheses(
-            to_chw(np.stack(images)), torch.from_numpy(np.stack(actions))[:, None]
-        )[3]
+    for batch in execution_batches(data, split, limit, BATCH):
+        images = to_chw(np.stack([seq.image(t) for _, seq, t in batch]))
+        actions = torch.from_numpy(np.stack([seq.actions[t] for _, seq, t in batch]))[:, None]
+        logits = net.rollout_hypotheses(images, actions)[3]
         z.extend((logits[:, 0, 1] - logits[:, 0, 0]).float().tolist())
-        images.clear()
-        actions.clear()
-
-    for i in list(data.indices(split))[:limit]:
-        seq = data.sequence(i)
-        for t, step in enumerate(fx.sequence_effects(seq)):
-            images.append(seq.image(t))
-            actions.append(seq.actions[t])
-            labels.append(not step.canonical)
-            if len(images) == BATCH:
-                flush()
-    if images:
-        flush()
+        labels.extend(not step.canonical for step, _, _ in batch)
     return np.array(z), np.array(labels)
 
 

@@ -107,16 +107,16 @@ class PredictionConfig:
     # gives it more than this probability (0.5: the likelier). A cut-off tuned on val, as the
     # recognition net's is: a second outcome drawn where none follows costs canonical plans.
     effect_threshold: float = 0.5
-    # The head's side-effect logit (the second outcome's minus the first's) is read as
-    # sigmoid(choice_scale * logit + choice_bias): Platt scaling fitted on val
-    # (prediction/calibration.py). Training draws side-effect runs more often than they come
-    # (effect_fraction), so the raw head overstates how often one follows; the planner that
-    # weighs outcomes by their probability (planning/branches.py) needs them as they come.
     # The choice head (spatial.CHOICE_HEADS): "pooled", a linear map of each candidate's dc
     # pooled over the grid; "grid", two convolutions over the scene's latent beside each dc
     # (choice_channels wide) before pooling, so it can see where the action meets the scene.
     choice_head: str = "pooled"
     choice_channels: int = 32
+    # The head's side-effect logit (the second outcome's minus the first's) is read as
+    # sigmoid(choice_scale * logit + choice_bias): Platt scaling fitted on val
+    # (prediction/calibration.py). Training draws side-effect runs more often than they come
+    # (effect_fraction), so the raw head overstates how often one follows; the planner that
+    # weighs outcomes by their probability (planning/branches.py) needs them as they come.
     choice_scale: float = 1.0
     choice_bias: float = 0.0
     # What training changes (train.TRAINED): "all"; "outcomes", only the other outcomes' own

@@ -126,30 +126,31 @@ class Foresight:
 
 
 @torch.no_grad()
+def execution_batches(data: Dataset, split: str, limit: int | None = None, size: int = BATCH):
+    """Every execution of a split (`limit`: the first so many sequences) in batches of `size`:
+    lists of (its effect label, its sequence, its step index)."""
+    batch: list[tuple] = []
+    for i in list(data.indices(split))[:limit]:
+        seq = data.sequence(i)
+        for t, step in enumerate(fx.sequence_effects(seq)):
+            batch.append((step, seq, t))
+            if len(batch) == size:
+                yield batch
+                batch = []
+    if batch:
+        yield batch
+
+
 def measure(predict, data: Dataset, split: str = "test", limit: int | None = None) -> Foresight:
     """Foresight of `predict(images (B, C, H, W), actions (B, 1, 7)) -> (B, 1, C, H, W)` over
     every execution of a split (`limit`: the first so many sequences)."""
     result = Foresight()
-    pending: list[tuple] = []
-
-    def flush() -> None:
-        images = to_chw(np.stack([p[1] for p in pending]))
-        actions = torch.from_numpy(np.stack([p[2] for p in pending]))[:, None]
-        predicted = to_hwc(predict(images, actions)[:, 0])
-        for (step, before, action, truth, poses0, poses1), pred in zip(pending, predicted, strict=True):
-            result.add(step, action, poses0, poses1, pred, before, truth)
-        pending.clear()
-
-    indices = list(data.indices(split))[:limit]
-    for i in indices:
-        seq = data.sequence(i)
-        for t, step in enumerate(fx.sequence_effects(seq)):
-            before, truth = seq.image(t), seq.image(t + 1)
-            pending.append((step, before, seq.actions[t], truth, seq.poses[t], seq.poses[t + 1]))
-            if len(pending) == BATCH:
-                flush()
-    if pending:
-        flush()
+    for batch in execution_batches(data, split, limit):
+        before = [seq.image(t) for _, seq, t in batch]
+        actions = torch.from_numpy(np.stack([seq.actions[t] for _, seq, t in batch]))[:, None]
+        predicted = to_hwc(predict(to_chw(np.stack(before)), actions)[:, 0])
+        for (step, seq, t), image, pred in zip(batch, before, predicted, strict=True):
+            result.add(step, seq.actions[t], seq.poses[t], seq.poses[t + 1], pred, image, seq.image(t + 1))
     return result
 
 

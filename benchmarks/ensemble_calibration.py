@@ -8,6 +8,12 @@ Table 2 is measured). Per predicted state: the members' mean per-pixel spread, a
 absolute RGBD error of their mean image against the true state. Prints Spearman's rank
 correlation of the two over the states (and over sampled pixels), the error in five
 equal-count bins of spread, and the same per prediction step; writes OUT/calibration.png.
+
+The predicted variance (the members' variance heads plus their spread, prediction/variance.py)
+against the squared error: the spread-to-error ratio sqrt(mean variance / mean squared error)
+on val, the scale factor that makes it 1 there, the ratio on test raw and scaled, Spearman
+over test states, and a reliability curve (predicted against actual RMS error, pixels binned
+by predicted variance) in the picture's third panel.
 """
 
 from __future__ import annotations
@@ -43,7 +49,11 @@ def main() -> None:
 
     members = load_learned(args.weights).members
     torch.set_num_threads(members[0].config.threads)
-    cal = calibrate(members, Dataset(args.data), "test", limit=args.runs)
+    data = Dataset(args.data)
+    val = calibrate(members, data, "val", limit=args.runs)
+    cal = calibrate(members, data, "test", limit=args.runs)
+    scale = val.fitted_scale()
+    trained_scale = members[0].config.variance_scale  # already in the members' variance
     live = cal.pixel_spread > DISAGREE
     report = {
         "members": len(members),
@@ -55,6 +65,15 @@ def main() -> None:
         "pixels": len(cal.pixel_spread),
         "error_over_spread": round(float(cal.error.mean() / cal.spread.mean()), 2),
         "by_spread": cal.by_spread(5),
+        "variance": {
+            "scale_in_weights": trained_scale,
+            "val_ratio": round(val.ratio(), 3),
+            "fitted_scale": round(scale, 4),
+            "test_ratio": round(cal.ratio(), 3),
+            "test_ratio_scaled": round(cal.ratio(scale), 3),
+            "test_rank_correlation": round(cal.variance_rank_correlation(), 4),
+            "reliability": cal.reliability(8),
+        },
         "by_step": {
             str(s): {
                 "states": int((cal.step == s).sum()),
@@ -67,7 +86,7 @@ def main() -> None:
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(15, 4))
     for s in sorted(set(cal.step.tolist())):
         pick = cal.step == s
         a.scatter(cal.spread[pick], cal.error[pick], s=6, alpha=0.5, label=f"step {s}")
@@ -92,6 +111,25 @@ def main() -> None:
         f"Spearman {report['live_pixel_rank_correlation']:.2f}",
     )
     b.grid(alpha=0.3, which="both")
+    rel = report["variance"]["reliability"]
+    predicted = np.array([x["predicted"] for x in rel])
+    c.loglog(predicted, [x["actual"] for x in rel], "k-o", label="as the weights give it")
+    c.loglog(
+        predicted * np.sqrt(scale), [x["actual"] for x in rel], "C1-s", label=f"x {scale:.2g}, fitted on val"
+    )
+    ends = [
+        min(predicted.min(), rel[0]["actual"]),
+        max(predicted.max() * np.sqrt(max(scale, 1)), rel[-1]["actual"]),
+    ]
+    c.loglog(ends, ends, ":", color="grey", label="calibrated")
+    c.set(
+        xlabel="predicted RMS error at a pixel (sqrt of the variance)",
+        ylabel="actual RMS error there",
+        title=f"8 bins of pixels: test ratio {report['variance']['test_ratio_scaled']:.2f} scaled, "
+        f"Spearman {report['variance']['test_rank_correlation']:.2f}",
+    )
+    c.legend(fontsize=7)
+    c.grid(alpha=0.3, which="both")
     fig.tight_layout()
     fig.savefig(out / "calibration.png", dpi=110)
     if args.json:
@@ -105,6 +143,12 @@ def main() -> None:
         f"(spread > {DISAGREE:g})"
     )
     print(f"mean error / mean spread: {report['error_over_spread']:.1f}")
+    v = report["variance"]
+    print(
+        f"variance: spread-to-error ratio {v['val_ratio']:.3f} on val -> scale {v['fitted_scale']:.4g}; "
+        f"test {v['test_ratio']:.3f} raw, {v['test_ratio_scaled']:.3f} scaled; Spearman(variance, "
+        f"squared error) over test states {v['test_rank_correlation']:.3f}"
+    )
     for x in bins:
         print(f"  spread {x['spread']:.4f}: error {x['error']:.4f} ({x['states']} states)")
     for s, x in report["by_step"].items():

@@ -36,7 +36,7 @@ def test_shapes_and_the_pick_follows_the_truth_or_the_choice_head():
     torch.manual_seed(0)
     net = PredictionNet(replace(TINY, hypotheses=3))
     images = two_outcomes(4)
-    states, differences, candidates, logits, picks = net(images[:, 0], place_rows(4), None, images[:, 1:])
+    states, differences, candidates, logits, picks, _ = net(images[:, 0], place_rows(4), None, images[:, 1:])
     assert candidates.shape == (4, 1, 3, 4, 128, 128) and logits.shape == (4, 1, 3) and picks.shape == (4, 1)
     for b in range(4):
         assert torch.equal(states[b, 0], candidates[b, 0, picks[b, 0]])
@@ -52,7 +52,7 @@ def test_effect_labels_pick_the_candidate_and_teach_the_head():
     net = PredictionNet(config)
     images = two_outcomes(4)
     labels = torch.tensor([[True], [False], [False], [True]])
-    _, _, _, logits, picks = net(images[:, 0], place_rows(4), None, images[:, 1:], labels)
+    _, _, _, logits, picks, _ = net(images[:, 0], place_rows(4), None, images[:, 1:], labels)
     assert picks[:, 0].tolist() == [1, 0, 0, 1]  # the labels, not the winners
     effects = torch.zeros((4, 1, 128, 128), dtype=torch.bool)
     effects[0, 0, :3, :3] = effects[3, 0, :3, :3] = True
@@ -138,7 +138,7 @@ def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the
     images, rows = two_outcomes(2), place_rows(2)
     with torch.no_grad():
         a = one.rollout(images[:, 0], rows)
-        _, _, candidates, logits, _ = many.rollout_hypotheses(images[:, 0], rows)
+        _, _, candidates, logits, _, _ = many.rollout_hypotheses(images[:, 0], rows)
     assert candidates.shape == (2, 1, 2, 4, 128, 128) and logits.shape == (2, 1, 2)
     assert torch.allclose(a[:, 0], candidates[:, 0, 0], atol=1e-6)
     assert 0 < (candidates[:, 0, 1] - candidates[:, 0, 0]).abs().max() < 0.1

@@ -101,12 +101,16 @@ def cmd_eval(args) -> int:
         if not args.no_futures:
             recognizer = load_nets(args.recognition).recognizer
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
-        if "choice_head" in result:  # a two-outcome net: its head's calibration, for `afford export`
+        if "choice_head" in result or "variance" in result:  # calibrations, for `afford export`
             from afford.prediction.calibration import CALIBRATION_FILE, format_calibration
 
-            (folder / CALIBRATION_FILE).write_text(json.dumps(result["choice_head"], indent=2) + "\n")
+            record = {
+                **result.get("choice_head", {}),
+                **({"variance": result["variance"]} if "variance" in result else {}),
+            }
+            (folder / CALIBRATION_FILE).write_text(json.dumps(record, indent=2) + "\n")
             if not args.json:
-                print(format_calibration(result["choice_head"]))
+                print(format_calibration(record))
     _report(args, result, folder, *EVALS[args.net], format_table(result))
     return 0
 

@@ -8,6 +8,15 @@ its standard deviation over the members: of two plans predicted equally close to
 the one the members agree on wins. For a negative goal (eq. (4) takes the greatest loss) the
 spread counts the other way: a state sure to be far from the goal beats one that may not be.
 With risk 0 the score is the members' mean loss, the ensemble without caution.
+
+Members with a variance head (prediction/variance.py) also say how sure each pixel is: each
+member's image is then a Gaussian, mean its image, standard deviation sigma per pixel, the
+error shared by the pixels of a state (one standard normal z scales every sigma: an object
+that may have moved moves as a whole). Eq. (5) of that state is taken at the three points of
+Gauss-Hermite quadrature, z = -sqrt(3), 0, sqrt(3) with weights 1/6, 2/3, 1/6 (exact for the
+mean and variance of a polynomial in z of degree up to 2, which a window's squared error is),
+so each member gives a mean and a variance of its loss; the plan's are their mean and the mean
+of the variances plus the variance of the means (the law of total variance).
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 
 RISK = 1.0  # the ensemble planner's default weight on the spread of a plan's outcome
+# Gauss-Hermite points and weights for a standard normal: the samples of a member's image.
+QUADRATURE = (np.array([-np.sqrt(3.0), 0.0, np.sqrt(3.0)]), np.array([1 / 6, 2 / 3, 1 / 6]))
 
 
 class EnsembleError(UserError):
@@ -42,18 +53,39 @@ class EnsembleState:
     latent: torch.Tensor
     memory: torch.Tensor
     images: np.ndarray  # (K, H, W, C): each member's predicted image
+    variances: np.ndarray | None = None  # (K, H, W): each member's variance head (None: none has)
 
     @property
     def pixel_spread(self) -> np.ndarray:
-        """(H, W): the members' per-pixel spread (`prediction.ensemble.spread`)."""
-        return spread(self.images)
+        """(H, W): the per-pixel standard deviation of the state: the members' spread
+        (`prediction.ensemble.spread`), with their variance heads' variance added to it."""
+        if self.variances is None:
+            return spread(self.images)
+        return np.sqrt(spread(self.images) ** 2 + self.variances.mean(axis=0))
 
 
-def risk_score(losses: np.ndarray, risk: float, negative: bool) -> tuple[np.ndarray, np.ndarray]:
-    """(score, spread) per state from the members' eq. (5) losses (K, B): the mean plus (a
-    positive goal) or minus (a negative one) `risk` standard deviations."""
-    mean, std = losses.mean(axis=0), losses.std(axis=0)
+def risk_score(
+    losses: np.ndarray, risk: float, negative: bool, within: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(score, spread) per state from the members' eq. (5) losses (K, B), and `within` (K, B)
+    each member's own variance of its loss (its variance head's): the mean plus (a positive
+    goal) or minus (a negative one) `risk` standard deviations, the variance being the members'
+    mean variance plus the variance of their means."""
+    mean = losses.mean(axis=0)
+    variance = losses.var(axis=0) + (0.0 if within is None else within.mean(axis=0))
+    std = np.sqrt(variance)
     return mean + (-risk if negative else risk) * std, std
+
+
+def quadrature_losses(goal: Goal, images: np.ndarray, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. (5)'s mean and variance (N,) for N Gaussian images: means (N, H, W, C), variances
+    per pixel (N, H, W), their error shared by every pixel (the module's doc)."""
+    points, weights = QUADRATURE
+    sigma = np.sqrt(np.maximum(variances, 0.0))[None, ..., None]
+    samples = np.clip(images[None] + points[:, None, None, None, None] * sigma, 0.0, 1.0)
+    losses = goal.loss(samples.reshape(-1, *images.shape[1:])).reshape(len(points), len(images))
+    mean = weights @ losses
+    return mean, weights @ (losses - mean) ** 2
 
 
 class EnsembleModel(WorldModel):
@@ -62,10 +94,11 @@ class EnsembleModel(WorldModel):
     def __init__(
         self, image: np.ndarray, recognizer: Recognizer, members: tuple[PredictionNet, ...], risk: float
     ):
-        if len(members) < 2:
+        if not members or (len(members) < 2 and not members[0].config.variance):
             raise EnsembleError(
-                f"an ensemble needs at least 2 prediction nets, not {len(members)}: put the members in the "
-                "weights folder's ensemble/ (`afford export --member`), beside its prediction net"
+                f"an ensemble needs at least 2 prediction nets, or one with a variance head, not "
+                f"{len(members)}: put the members in the weights folder's ensemble/ (`afford export "
+                "--member`), beside its prediction net"
             )
         self.image = np.asarray(image, dtype=np.float32)
         self.recognizer = recognizer
@@ -88,17 +121,20 @@ class EnsembleModel(WorldModel):
     @torch.no_grad()
     def predict(self, parents: list[Node], actions: list[Affordance]):
         rows = torch.from_numpy(np.stack([encode_affordance(a) for a in actions]))
-        out_latent, out_memory, out_images = [], [], []
+        out_latent, out_memory, out_images, out_variances = [], [], [], []
         for k, member in enumerate(self.members):
             latent = torch.stack([p.state.latent[k] for p in parents])
             memory = torch.stack([p.state.memory[k] for p in parents])
             image = to_chw(np.stack([p.state.images[k] for p in parents]))
-            latent, memory, image = member.step(latent, memory, image, rows)
+            latent, memory, image, _, _, log_var = member.step_hypotheses(latent, memory, image, rows)
             out_latent.append(latent)
             out_memory.append(memory)
             out_images.append(to_hwc(image))
+            none = np.zeros((len(parents), *image.shape[-2:]), dtype=np.float32)
+            out_variances.append(none if log_var is None else member.variance(log_var)[:, 0].numpy())
         self.p_steps += len(parents) * len(self.members)
         images = np.stack(out_images)  # (K, B, H, W, C)
+        variances = np.stack(out_variances) if any(m.config.variance for m in self.members) else None
         return [
             (
                 images[:, j].mean(axis=0),
@@ -106,6 +142,7 @@ class EnsembleModel(WorldModel):
                     torch.stack([t[j] for t in out_latent]),
                     torch.stack([t[j] for t in out_memory]),
                     images[:, j],
+                    None if variances is None else variances[:, j],
                 ),
             )
             for j in range(len(parents))
@@ -115,5 +152,15 @@ class EnsembleModel(WorldModel):
         """Eq. (5) per member, then `risk_score`: the score and its spread over the members."""
         k = len(self.members)
         stacked = np.concatenate([n.state.images for n in nodes])  # (B*K, H, W, C), node-major
-        losses = goal.loss(stacked).reshape(len(nodes), k).T
-        return Scores(*risk_score(losses, self.risk, goal.negative))
+        if all(n.state.variances is None for n in nodes):
+            losses = goal.loss(stacked).reshape(len(nodes), k).T
+            return Scores(*risk_score(losses, self.risk, goal.negative))
+        variances = np.concatenate(
+            [
+                n.state.variances if n.state.variances is not None else np.zeros(n.state.images.shape[:3])
+                for n in nodes
+            ]
+        )
+        mean, within = quadrature_losses(goal, stacked, variances)
+        shape = (len(nodes), k)
+        return Scores(*risk_score(mean.reshape(shape).T, self.risk, goal.negative, within.reshape(shape).T))

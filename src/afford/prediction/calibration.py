@@ -115,19 +115,34 @@ def read_calibration(run: str | Path) -> dict | None:
     if not path.is_file():
         return None
     record = json.loads(path.read_text())
-    return {k: record[k] for k in ("choice_scale", "choice_bias")}
+    config = {k: record[k] for k in ("choice_scale", "choice_bias") if k in record}
+    if "variance" in record:  # the variance head's scale (prediction/ensemble.calibrate_variance)
+        config["variance_scale"] = record["variance"]["variance_scale"]
+    return config or None
 
 
 def format_calibration(record: dict) -> str:
-    lines = [
-        f"choice head, side effect follows: sigmoid({record['choice_scale']} z + {record['choice_bias']}) "
-        "(Platt scaling, fitted on val)"
-    ]
+    """The calibrations a run's calibration.json holds, a line or three each."""
+    lines = _head_lines(record) if "choice_scale" in record else []
+    if "variance" in record:
+        v, test = record["variance"], record["variance"]["test"]
+        lines.append(
+            f"variance head: spread-to-error ratio {v['val']['ratio']:.3f} on val -> variance_scale "
+            f"{v['variance_scale']:.4g}; test {test['ratio']:.3f} raw, {test['ratio_calibrated']:.3f} "
+            f"calibrated, Spearman(variance, squared error) {test['rank_correlation']:.3f} over "
+            f"{test['states']} states"
+        )
+    return "\n".join(lines)
+
+
+def _head_lines(record: dict) -> list[str]:
+    scale, bias = record["choice_scale"], record["choice_bias"]
+    lines = [f"choice head, side effect follows: sigmoid({scale} z + {bias}) (Platt scaling, fitted on val)"]
     for split in ("val", "test"):
         r = record[split]
         lines.append(
-            f"  {split}: {r['executions']} executions, {r['rate']:.3f} with a side effect; mean probability "
-            f"{r['mean_raw']:.3f} raw, {r['mean_calibrated']:.3f} calibrated; log-loss {r['nll_raw']:.4f} -> "
-            f"{r['nll_calibrated']:.4f}; ROC AUC {r['auc']:.3f}"
+            f"  {split}: {r['executions']} executions, {r['rate']:.3f} with a side effect; mean "
+            f"probability {r['mean_raw']:.3f} raw, {r['mean_calibrated']:.3f} calibrated; log-loss "
+            f"{r['nll_raw']:.4f} -> {r['nll_calibrated']:.4f}; ROC AUC {r['auc']:.3f}"
         )
-    return "\n".join(lines)
+    return lines

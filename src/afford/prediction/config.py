@@ -122,8 +122,18 @@ class PredictionConfig:
     # What training changes (train.TRAINED): "all"; "outcomes", only the other outcomes' own
     # parts (fork=latent's P^a ends, the choice head), so that fine-tuning a one-outcome net into
     # two keeps its first outcome exactly: what it foresaw, and the plans it found, stay;
-    # "head", only the choice head (a new head on a net whose outcomes are kept).
+    # "head", only the choice head (a new head on a net whose outcomes are kept); "variance",
+    # only the variance head (a net that learns where it is unsure, its images unchanged).
     trained: str = "all"
+    # A per-pixel variance beside D's image (spatial only; prediction/variance.py, paper V):
+    # D's last features also give log sigma^2 of each pixel of the state it predicts, trained by
+    # beta-NLL against the truth (`loss_nll`, `nll_beta`) with the image itself held fixed in that
+    # term, so the mean image learns exactly as without it. `variance_scale`: the factor fitted on
+    # val that makes the variance match the squared error (1: as trained).
+    variance: bool = False
+    loss_nll: float = 0.0
+    nll_beta: float = 0.5
+    variance_scale: float = 1.0
 
     @property
     def latent_size(self) -> int:

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from afford.prediction.model import PredictionNet
+from afford.prediction.variance import total_variance
 
 MEMBERS_DIR = "ensemble"  # in a weights folder: the members beside its prediction net
 
@@ -52,17 +53,49 @@ def check_members(nets: list[PredictionNet]) -> None:
 
 @dataclass
 class Calibration:
-    """Per predicted state (a run's step): the members' spread and the ensemble mean's error."""
+    """Per predicted state (a run's step): the members' spread and the ensemble mean's error,
+    and the state's predicted variance (`variance.total_variance`: the members' variance heads
+    and their spread) against the mean's squared error."""
 
     spread: np.ndarray  # mean per-pixel spread (`spread`) over the image
     error: np.ndarray  # mean absolute RGBD error of the members' mean against the truth
     step: np.ndarray  # the step of the run it was predicted at (1-4)
     pixel_spread: np.ndarray  # per pixel, pooled over states (a sample): spread ...
     pixel_error: np.ndarray  # ... and the mean's absolute error there
+    variance: np.ndarray  # mean predicted variance over the image (per channel value) ...
+    squared: np.ndarray  # ... and the mean's squared error (mean over channels and pixels)
+    pixel_variance: np.ndarray  # per sampled pixel: predicted variance ...
+    pixel_squared: np.ndarray  # ... and the mean's squared error there
 
     def rank_correlation(self) -> float:
         """Spearman's rank correlation of spread and error over the states."""
         return spearman(self.spread, self.error)
+
+    def ratio(self, scale: float = 1.0) -> float:
+        """The spread-to-error ratio, sqrt(mean predicted variance / mean squared error): 1 when
+        the variance says how large the error is; `scale` multiplies the variance first."""
+        return float(np.sqrt(scale * self.variance.mean() / max(self.squared.mean(), 1e-12)))
+
+    def fitted_scale(self) -> float:
+        """The factor on the variance that makes the ratio 1 (fitted on val, used on test)."""
+        return float(self.squared.mean() / max(self.variance.mean(), 1e-12))
+
+    def variance_rank_correlation(self) -> float:
+        """Spearman's rank correlation of predicted variance and squared error over the states."""
+        return spearman(self.variance, self.squared)
+
+    def reliability(self, bins: int = 8) -> list[dict]:
+        """Sampled pixels in `bins` equal-count bins of predicted standard deviation: each bin's
+        predicted and actual root mean squared error (equal where the variance is right)."""
+        order = np.argsort(self.pixel_variance)
+        return [
+            {
+                "predicted": float(np.sqrt(self.pixel_variance[part].mean())),
+                "actual": float(np.sqrt(self.pixel_squared[part].mean())),
+                "pixels": int(len(part)),
+            }
+            for part in np.array_split(order, bins)
+        ]
 
     def by_spread(self, bins: int = 5) -> list[dict]:
         """States split into `bins` equal-count bins of spread: each bin's spread and error."""
@@ -94,21 +127,58 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
     runs = PredictionData(data, split, max_steps=4, random_start=False)
     picks = np.arange(len(runs)) if limit is None else np.linspace(0, len(runs) - 1, limit).astype(int)
     rng = np.random.default_rng(0)
-    spreads, errors, steps, px_s, px_e = [], [], [], [], []
+    columns: dict[str, list] = {name: [] for name in ("spread", "error", "step", "variance", "squared")}
+    pixels: dict[str, list] = {name: [] for name in ("spread", "error", "variance", "squared")}
     for b in range(0, len(picks), batch):
         images, actions, lengths = collate_prediction([runs[int(k)] for k in picks[b : b + batch]])
-        outs = torch.stack([m.rollout(images[:, 0], actions, lengths) for m in members])  # (K, B, L, C, H, W)
+        outs, variances = [], []
+        for m in members:
+            rolled = m.rollout_hypotheses(images[:, 0], actions, lengths)
+            outs.append(rolled[0])
+            log_var = rolled[5]
+            variances.append(
+                torch.zeros_like(rolled[0][:, :, 0]) if log_var is None else m.variance(log_var)[:, :, 0]
+            )
+        outs = torch.stack(outs)  # (K, B, L, C, H, W)
         mean = outs.mean(0)
-        per_pixel = torch.from_numpy(spread(outs.permute(0, 1, 2, 4, 5, 3).numpy())).float()  # (B, L, H, W)
-        err = (mean - images[:, 1:]).abs().mean(2)
+        per_pixel = {
+            "spread": torch.from_numpy(
+                spread(outs.permute(0, 1, 2, 4, 5, 3).numpy())
+            ).float(),  # (B, L, H, W)
+            "error": (mean - images[:, 1:]).abs().mean(2),
+            "variance": total_variance(outs, torch.stack(variances)),
+            "squared": ((mean - images[:, 1:]) ** 2).mean(2),
+        }
         for j in range(len(lengths)):
             for s in range(int(lengths[j])):
-                spreads.append(float(per_pixel[j, s].mean()))
-                errors.append(float(err[j, s].mean()))
-                steps.append(s + 1)
-                at = rng.integers(per_pixel[j, s].numel(), size=PIXELS_PER_STATE)
-                px_s.append(per_pixel[j, s].flatten()[at].numpy())
-                px_e.append(err[j, s].flatten()[at].numpy())
+                at = rng.integers(per_pixel["spread"][j, s].numel(), size=PIXELS_PER_STATE)
+                for name, values in per_pixel.items():
+                    columns[name].append(float(values[j, s].mean()))
+                    pixels[name].append(values[j, s].flatten()[at].numpy())
+                columns["step"].append(s + 1)
     return Calibration(
-        np.array(spreads), np.array(errors), np.array(steps), np.concatenate(px_s), np.concatenate(px_e)
+        **{name: np.array(values) for name, values in columns.items()},
+        **{f"pixel_{name}": np.concatenate(values) for name, values in pixels.items()},
     )
+
+
+VARIANCE_RUNS = 300  # runs of each split the variance's calibration rolls out
+
+
+def calibrate_variance(members, data, limit: int | None = VARIANCE_RUNS) -> dict:
+    """The predicted variance against the squared error: the scale fitted on val that makes
+    the spread-to-error ratio 1 there, and the ratio and Spearman on val and test, a JSON-ready
+    record whose `variance_scale` (the members' own times the fitted one) goes in the config."""
+    val, test = (calibrate(members, data, split, limit) for split in ("val", "test"))
+    fitted = val.fitted_scale()
+    return {
+        "variance_scale": round(members[0].config.variance_scale * fitted, 6),
+        "fitted_on": "val",
+        "val": {"states": len(val.variance), "ratio": round(val.ratio(), 4)},
+        "test": {
+            "states": len(test.variance),
+            "ratio": round(test.ratio(), 4),
+            "ratio_calibrated": round(test.ratio(fitted), 4),
+            "rank_correlation": round(test.variance_rank_correlation(), 4),
+        },
+    }

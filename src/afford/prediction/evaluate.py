@@ -117,6 +117,10 @@ def evaluate(
         from afford.prediction.calibration import calibrate
 
         result["choice_head"] = calibrate(net, data)
+    if config.variance:
+        from afford.prediction.ensemble import calibrate_variance
+
+        result["variance"] = calibrate_variance([net], data)
     if recognizer is not None:
         from afford.prediction.futures import future_recall, net_predictor
 

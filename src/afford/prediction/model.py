@@ -64,6 +64,7 @@ class Outcomes:
     memory: torch.Tensor
     images: torch.Tensor
     probability: torch.Tensor
+    log_variance: torch.Tensor | None = None  # (B, K, 1, H, W) with a variance head
 
 
 # Weight of what a candidate would draw (its new values, before eq. (3)'s mask) in choosing the
@@ -104,6 +105,8 @@ class PredictionNet(nn.Module):
             raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {config.hypotheses_by!r}")
         if config.fork not in FORKS:
             raise ValueError(f"fork: one of {', '.join(FORKS)}, not {config.fork!r}")
+        if config.variance and config.architecture != "spatial":
+            raise ValueError("variance: a variance head needs the spatial architecture")
         if config.hypotheses_by == "effect" and config.hypotheses != 2:
             raise ValueError("hypotheses_by=effect needs hypotheses=2: a canonical and a side-effect outcome")
         encoder, p_module, decoder = ARCHITECTURES[config.architecture]
@@ -155,12 +158,15 @@ class PredictionNet(nn.Module):
 
     def _candidates(self, latent, memory, image, rows):
         """K > 1: (dc, memory, candidates (B, K, C, H, W), differences (B, K, C+1, H, W),
-        choice logits (B, K)); dc and memory (B, K, ...) when forked in the latent."""
+        choice logits (B, K), log variances (B, K, 1, H, W) or None); dc and memory (B, K, ...)
+        when forked in the latent."""
         dc, memory_out = self._p_step(latent, memory, image, rows)
         b, k = len(image), self.config.hypotheses
         repeated = image.repeat_interleave(k, 0)
         forked = self.config.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
-        difference = self.decoder(dc.flatten(0, 1), repeated) if forked else self.decoder(dc, image)
+        difference, log_var = (
+            self.decoder.decode(dc.flatten(0, 1), repeated) if forked else self.decoder.decode(dc, image)
+        )
         differences = difference.view(b, k, -1, *difference.shape[-2:])
         candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)
         return (
@@ -169,16 +175,27 @@ class PredictionNet(nn.Module):
             candidates.view(b, k, *image.shape[1:]),
             differences,
             self.decoder.choice_logits(dc, latent),
+            None if log_var is None else log_var.reshape(b, k, 1, *log_var.shape[-2:]),
         )
+
+    def variance(self, log_variance: torch.Tensor) -> torch.Tensor:
+        """The variance per pixel from the head's log sigma^2, scaled by the calibration on val."""
+        return self.config.variance_scale * torch.exp(log_variance.float())
 
     def step_outcomes(self, latent, memory, image, rows) -> Outcomes:
         """Every outcome of one step, each carried on as its own state, with the choice head's
         probability of each: what a planner that keeps the alternatives (planning/branches.py)
         grows. One outcome of probability 1 for a one-hypothesis net."""
         if self.config.hypotheses == 1:
-            latent, memory, image, _, _ = self.step_hypotheses(latent, memory, image, rows)
-            return Outcomes(latent[:, None], memory[:, None], image[:, None], image.new_ones(len(image), 1))
-        dc, memory_out, candidates, _, logits = self._candidates(latent, memory, image, rows)
+            latent, memory, image, _, _, log_var = self.step_hypotheses(latent, memory, image, rows)
+            return Outcomes(
+                latent[:, None],
+                memory[:, None],
+                image[:, None],
+                image.new_ones(len(image), 1),
+                None if log_var is None else log_var[:, None],
+            )
+        dc, memory_out, candidates, _, logits, log_var = self._candidates(latent, memory, image, rows)
         k = self.config.hypotheses
         if self.config.fork != "latent":  # one dc and memory for every candidate
             dc = dc[:, None].expand(-1, k, *dc.shape[1:])
@@ -189,6 +206,7 @@ class PredictionNet(nn.Module):
             memory_out,
             candidates,
             self.probabilities(logits),
+            log_var,
         )
 
     def probabilities(self, logits: torch.Tensor) -> torch.Tensor:
@@ -215,17 +233,30 @@ class PredictionNet(nn.Module):
         truth: torch.Tensor | None = None,
         label: torch.Tensor | None = None,
     ):
-        """`step_with_difference` and, with K > 1 hypotheses, the `Hypotheses` (else None):
-        the candidate carried on is the one `label` (B,) names where it is given (training by
+        """`step_with_difference`, then with K > 1 hypotheses the `Hypotheses` (else None) and
+        with a variance head the log sigma^2 of the state drawn (B, 1, H, W) (else None): the
+        candidate carried on is the one `label` (B,) names where it is given (training by
         effect labels), else the one nearest `truth` where that is given (training's
         winner-takes-all), else the one the choice head finds most likely."""
         k = self.config.hypotheses
         if k == 1:
             dc, memory_out = self._p_step(latent, memory, image, rows)
-            difference = self.decoder(dc, image)
+            if self.config.architecture == "spatial":
+                difference, log_var = self.decoder.decode(dc, image)
+            else:
+                difference, log_var = self.decoder(dc, image), None
             next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
-            return next_latent, memory_out, apply_difference(image, difference), difference, None  # eq. (3)
-        dc, memory_out, candidates, differences, logits = self._candidates(latent, memory, image, rows)
+            return (
+                next_latent,
+                memory_out,
+                apply_difference(image, difference),
+                difference,
+                None,
+                log_var,
+            )  # eq. (3)
+        dc, memory_out, candidates, differences, logits, log_var = self._candidates(
+            latent, memory, image, rows
+        )
         b = len(image)
         if label is not None:
             picked = label.long()
@@ -245,17 +276,22 @@ class PredictionNet(nn.Module):
             candidates[at, picked],
             differences[at, picked],
             Hypotheses(candidates, logits, picked),
+            None if log_var is None else log_var[at, picked],
         )
 
     def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         """Weights of a one-hypothesis net for this one (fine-tuning the shipped net with K
         hypotheses): D's output repeated for each candidate, each a little apart so that
-        winner-takes-all can tell them apart, and the choice head as initialised (uniform)."""
+        winner-takes-all can tell them apart, and the choice head as initialised (uniform).
+        Weights without a variance head for a net with one: the head as initialised."""
         k = self.config.hypotheses
         own = self.state_dict()
+        state = dict(state)
+        for name in own:  # a net given a variance head: the head as initialised, the rest as trained
+            if name.startswith("decoder.variance.") and name not in state:
+                state[name] = own[name]
         if k == 1:
             return state
-        state = dict(state)
         if "decoder.choice.weight" in state:  # already K outcomes: a head of another design starts anew
             head = [n for n in set(own) | set(state) if n.startswith("decoder.choice")]
             if any(n not in state or n not in own or state[n].shape != own[n].shape for n in head):
@@ -313,9 +349,10 @@ class PredictionNet(nn.Module):
         labels: torch.Tensor | None = None,
     ) -> tuple:
         """`rollout_with_differences`, and with K > 1 hypotheses also every step's candidates
-        (B, L, K, C, H, W), logits (B, L, K) and picks (B, L) (else None, None, None); with
-        `truth` (B, L, C, H, W) each step carries on its winner, with `labels` (B, L) the
-        candidate they name (`step_hypotheses`)."""
+        (B, L, K, C, H, W), logits (B, L, K) and picks (B, L) (else None, None, None), and with
+        a variance head the log sigma^2 of each state (B, L, 1, H, W) (else None); with `truth`
+        (B, L, C, H, W) each step carries on its winner, with `labels` (B, L) the candidate they
+        name (`step_hypotheses`)."""
         b, length = actions.shape[:2]
         at = image.device
         order = (
@@ -333,12 +370,12 @@ class PredictionNet(nn.Module):
         truth = None if truth is None else truth[order]
         labels = None if labels is None else labels[order]
         latent, memory = self.encode(image)
-        states = differences = candidates = logits = picks = None
+        states = differences = candidates = logits = picks = log_vars = None
         for i in range(length):
             n = int(active[i])
             if n == 0:
                 break
-            latent, memory, image, difference, hyp = self.step_hypotheses(
+            latent, memory, image, difference, hyp, log_var = self.step_hypotheses(
                 latent[:n],
                 memory[:n],
                 image[:n],
@@ -353,13 +390,17 @@ class PredictionNet(nn.Module):
                     candidates = hyp.candidates.new_zeros((b, length, *hyp.candidates.shape[1:]))
                     logits = hyp.logits.new_zeros((b, length, hyp.logits.shape[1]))
                     picks = hyp.picked.new_zeros((b, length))
+                if log_var is not None:
+                    log_vars = log_var.new_zeros((b, length, *log_var.shape[1:]))
             states[order[:n], i] = image
             differences[order[:n], i] = difference
             if hyp is not None:
                 candidates[order[:n], i] = hyp.candidates
                 logits[order[:n], i] = hyp.logits
                 picks[order[:n], i] = hyp.picked
-        return states, differences, candidates, logits, picks
+            if log_var is not None:
+                log_vars[order[:n], i] = log_var
+        return states, differences, candidates, logits, picks, log_vars
 
     def forward(
         self,

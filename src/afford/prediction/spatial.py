@@ -29,6 +29,7 @@ from torch import nn
 
 from afford.prediction.config import PredictionConfig
 from afford.prediction.layers import clamped_tanh
+from afford.prediction.variance import VarianceHead
 from afford.sim.camera import SIZE
 
 # D's mask starts nearly closed (clamped tanh(MASK_BIAS)): eq. (3) first copies the state. Not
@@ -221,6 +222,8 @@ class SpatialDecoder(nn.Module):
         self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1) * drawn, 1)
         with torch.no_grad():
             self.out.bias.view(drawn, c.channels + 1, 4)[:, -1] = MASK_BIAS  # pixel_shuffle: channel-major
+        # How sure each drawn pixel is (config.variance): from the same last features.
+        self.variance = VarianceHead(c.full_channels, drawn, act) if c.variance else None
         if k > 1:  # which candidate is likely, from features pooled over the grid (mean and max)
             if c.choice_head not in CHOICE_HEADS:
                 raise ValueError(f"choice_head: one of {', '.join(CHOICE_HEADS)}, not {c.choice_head!r}")
@@ -236,8 +239,15 @@ class SpatialDecoder(nn.Module):
 
     def forward(self, dc: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
         """(B, K * (C+1), H, W): each candidate's difference image, eq. (3)'s mask last."""
+        return self.decode(dc, image)[0]
+
+    def decode(self, dc: torch.Tensor, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """`forward`'s difference images and, with a variance head, each candidate's log
+        sigma^2 per pixel (B, K, H, W) (else None)."""
         x = torch.cat([self.up(dc), nn.functional.pixel_unshuffle(image, 2)], 1)
-        return clamped_tanh(nn.functional.pixel_shuffle(self.out(self.full(x)), 2))
+        features = self.full(x)
+        difference = clamped_tanh(nn.functional.pixel_shuffle(self.out(features), 2))
+        return difference, None if self.variance is None else self.variance(features)
 
     def choice_logits(self, dc: torch.Tensor, latent: torch.Tensor) -> torch.Tensor:
         """(B, K): how likely each candidate outcome is (softmax), for K > 1; dc (B, C, h, w),

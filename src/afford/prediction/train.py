@@ -16,6 +16,7 @@ from afford.data.torch_data import JoinedData, PredictionData, collate_predictio
 from afford.prediction.config import PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
+from afford.prediction.variance import beta_nll
 from afford.sim.affordances import TYPES
 from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
@@ -76,7 +77,7 @@ def sequence_loss(
     if many and c.hypotheses_by == "effect" and effects is not None:  # else (validation) the winner
         labels = effects.flatten(2).any(-1)  # (B, L): the step had a side effect
     with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
-        predicted, differences, candidates, logits, picks = net(
+        predicted, differences, candidates, logits, picks, log_vars = net(
             images[:, 0], actions, steps, truth if many else None, labels
         )
     predicted, differences = predicted.float(), differences.float()
@@ -100,6 +101,8 @@ def sequence_loss(
         err = err + c.loss_others * others.mean(-1)
         choice = nn.functional.cross_entropy(logits.float().flatten(0, 1), picks.flatten(), reduction="none")
         err = err + c.loss_choice * choice.view_as(err)
+    if c.loss_nll and log_vars is not None:  # the variance head learns the error of the image held fixed
+        err = err + c.loss_nll * beta_nll(predicted, log_vars.float(), truth, c.nll_beta).mean((-2, -1))
     mask = step_mask(steps, actions.shape[1])
     return (err * mask).sum() / mask.sum()
 
@@ -155,6 +158,7 @@ TRAINED = {
     "all": lambda name: True,
     "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice"),
     "head": lambda name: name.startswith("decoder.choice"),
+    "variance": lambda name: name.startswith("decoder.variance"),
 }
 
 

@@ -122,3 +122,38 @@ def test_two_outcomes_each_have_a_variance():
     outcomes = net.step_outcomes(latent, memory, images[:, 0], rows[:, 0])
     assert outcomes.log_variance.shape == (2, 2, 1, 128, 128)
     assert torch.all(net.variance(outcomes.log_variance) > 0)
+
+
+def test_one_net_with_a_variance_head_is_an_ensemble_that_knows_its_spread(scene):
+    from test_ensemble import GRASP, SPECS
+
+    from afford.planning.tree import Node
+    from afford.planning.uncertain import EnsembleModel
+    from afford.recognition.config import PRESETS as REC
+    from afford.recognition.infer import Recognizer
+    from afford.recognition.model import RecognitionNet
+
+    torch.manual_seed(0)
+    net = PredictionNet(WITH_HEAD)
+    scene.reset(SPECS)
+    recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], 0.0)
+    model = EnsembleModel(scene.observe(), recognizer, (net,), 1.0)
+    image, state = model.root()
+    ((child, child_state),) = model.predict([Node((), image, state)], [GRASP])
+    assert child_state.variances.shape == (1, 128, 128) and np.all(child_state.variances > 0)
+    node = Node((GRASP,), child, child_state)
+    goal = Goal(np.full((8, 8, 4), 0.5, np.float32))
+    scores = model.score(goal, [node])
+    assert scores.spread[0] > 0 and scores.loss[0] > goal.loss(child[None])[0]
+
+
+def test_the_variance_calibration_fits_a_scale_on_val(small_dataset):
+    from afford.data.format import Dataset
+    from afford.prediction.ensemble import calibrate
+
+    torch.manual_seed(0)
+    net = PredictionNet(WITH_HEAD)
+    cal = calibrate([net], Dataset(small_dataset), "train", batch=4)
+    assert len(cal.variance) == len(cal.squared) == len(cal.step) > 0 and np.all(cal.variance > 0)
+    assert cal.ratio(cal.fitted_scale()) == pytest.approx(1.0, rel=1e-6)
+    assert sum(b["pixels"] for b in cal.reliability(4)) == len(cal.pixel_variance)

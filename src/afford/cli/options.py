@@ -123,8 +123,9 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         type=float,
         default=PlannerConfig.risk,
         metavar="W",
-        help="ensemble planner: a plan scores the members' mean goal loss (eq. 5) plus W standard "
-        f"deviations of it over the members: risk-averse (default {PlannerConfig.risk}); 0: the mean alone",
+        help="ensemble planner: a plan scores the members' expected goal loss (eq. 5; over their "
+        "variance heads' outcomes too, where they have them) plus W standard deviations of it: "
+        f"risk-averse (default {PlannerConfig.risk}); 0: the expected loss alone",
     )
     parser.add_argument(
         "--outcomes",

@@ -73,12 +73,15 @@ def sequence_loss(
     c = getattr(net, "module", net).config
     truth = images[:, 1:]
     many = c.hypotheses > 1
+    # A variance head trained alone learns the error of the outcome the net carries on when it
+    # plans (its own pick), not of the one the truth or a label would pick.
+    own_pick = c.trained == "variance"
     labels = None
-    if many and c.hypotheses_by == "effect" and effects is not None:  # else (validation) the winner
+    if many and c.hypotheses_by == "effect" and effects is not None and not own_pick:  # else the winner
         labels = effects.flatten(2).any(-1)  # (B, L): the step had a side effect
     with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
         predicted, differences, candidates, logits, picks, log_vars = net(
-            images[:, 0], actions, steps, truth if many else None, labels
+            images[:, 0], actions, steps, truth if many and not own_pick else None, labels
         )
     predicted, differences = predicted.float(), differences.float()
     diff = predicted - truth

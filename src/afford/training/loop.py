@@ -118,6 +118,9 @@ class _Run:
         loss, parts = loop.train_step(batch)
         loop.optimizer.zero_grad(set_to_none=True)
         loss.backward()
+        clip = getattr(loop.config, "grad_clip", 0.0)
+        if clip:  # one wild batch must not poison Adam's second moments for thousands of steps
+            torch.nn.utils.clip_grad_norm_(loop.model.parameters(), clip)
         loop.optimizer.step()
         state.step += 1
         for k, v in {"loss": float(loss.detach()), **parts}.items():

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import replace
 from pathlib import Path
 
 DISAGREE = 1e-3  # a pixel's spread above which the members count as disagreeing there
@@ -54,6 +55,10 @@ def main() -> None:
     cal = calibrate(members, data, "test", limit=args.runs)
     scale = val.fitted_scale()
     trained_scale = members[0].config.variance_scale  # already in the members' variance
+    what = "members' spread"
+    if any(m.config.variance for m in members):  # the spread panels show the state's whole std
+        cal = replace(cal, spread=np.sqrt(cal.variance), pixel_spread=np.sqrt(cal.pixel_variance))
+        what = "predicted std (variance heads and spread)"
     live = cal.pixel_spread > DISAGREE
     report = {
         "members": len(members),
@@ -93,7 +98,7 @@ def main() -> None:
     bins = report["by_spread"]
     a.plot([x["spread"] for x in bins], [x["error"] for x in bins], "k-o", label="5 bins of spread")
     a.set(
-        xlabel="members' spread (mean over the image)",
+        xlabel=f"{what} (mean over the image)",
         ylabel="error of their mean (mean abs RGBD)",
         title=f"per predicted state: Spearman {report['rank_correlation']:.2f}",
     )
@@ -105,7 +110,7 @@ def main() -> None:
     parts = np.array_split(order, 10)
     b.loglog([cal.pixel_spread[p].mean() for p in parts], [cal.pixel_error[p].mean() for p in parts], "k-o")
     b.set(
-        xlabel="members' spread at a pixel",
+        xlabel=f"{what} at a pixel",
         ylabel="error of their mean there",
         title=f"pixels with spread > {DISAGREE:g}, 10 bins: "
         f"Spearman {report['live_pixel_rank_correlation']:.2f}",

@@ -149,7 +149,8 @@ class EnsembleModel(WorldModel):
         ]
 
     def score(self, goal: Goal, nodes: list[Node]) -> Scores:
-        """Eq. (5) per member, then `risk_score`: the score and its spread over the members."""
+        """Eq. (5) per member (its expectation by `quadrature_losses` where members have a
+        variance head), then `risk_score`: the score and the standard deviation of the loss."""
         k = len(self.members)
         stacked = np.concatenate([n.state.images for n in nodes])  # (B*K, H, W, C), node-major
         if all(n.state.variances is None for n in nodes):

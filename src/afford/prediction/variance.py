@@ -63,9 +63,4 @@ def total_variance(means: torch.Tensor, variances: torch.Tensor) -> torch.Tensor
     """The variance of a state per pixel from K members' means (K, ..., C, H, W) and variances
     (K, ..., H, W): the mean of the variances plus the variance of the means (averaged over the
     channels), the law of total variance. Zero where the members agree and are sure."""
-    spread = (
-        means.var(0, unbiased=False).mean(-3)
-        if len(means) > 1
-        else means.new_zeros(means.shape[1:-3] + means.shape[-2:])
-    )
-    return variances.mean(0) + spread
+    return variances.mean(0) + means.var(0, unbiased=False).mean(-3)

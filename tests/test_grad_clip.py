@@ -1,20 +1,12 @@
 """grad_clip: one wild batch moves the weights by no more than the clip allows."""
 
-from dataclasses import dataclass
+from dataclasses import replace
 
 import torch
 from torch import nn
 
+from afford.prediction.config import PRESETS
 from afford.training.loop import Loop, _Run
-
-
-@dataclass
-class _Config:
-    lr: float = 1.0
-    steps: int = 1
-    eval_every: int = 1
-    log_every: int = 1
-    grad_clip: float = 0.0
 
 
 def _moved(tmp_path, clip: float) -> float:
@@ -22,7 +14,7 @@ def _moved(tmp_path, clip: float) -> float:
     nn.init.zeros_(model.weight)
     loop = Loop(
         kind="prediction",
-        config=_Config(grad_clip=clip),
+        config=replace(PRESETS["tiny"], lr=1.0, grad_clip=clip),
         model=model,
         optimizer=torch.optim.SGD(model.parameters(), lr=1.0),
         batches=[torch.ones(1, 1)],

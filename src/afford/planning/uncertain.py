@@ -121,6 +121,7 @@ class EnsembleModel(WorldModel):
     @torch.no_grad()
     def predict(self, parents: list[Node], actions: list[Affordance]):
         rows = torch.from_numpy(np.stack([encode_affordance(a) for a in actions]))
+        heads = any(m.config.variance for m in self.members)
         out_latent, out_memory, out_images, out_variances = [], [], [], []
         for k, member in enumerate(self.members):
             latent = torch.stack([p.state.latent[k] for p in parents])
@@ -130,11 +131,12 @@ class EnsembleModel(WorldModel):
             out_latent.append(latent)
             out_memory.append(memory)
             out_images.append(to_hwc(image))
-            none = np.zeros((len(parents), *image.shape[-2:]), dtype=np.float32)
-            out_variances.append(none if log_var is None else member.variance(log_var)[:, 0].numpy())
+            if heads:  # a member without a head: zero variance of its own
+                var = torch.zeros_like(image[:, 0]) if log_var is None else member.variance(log_var)[:, 0]
+                out_variances.append(var.numpy())
         self.p_steps += len(parents) * len(self.members)
         images = np.stack(out_images)  # (K, B, H, W, C)
-        variances = np.stack(out_variances) if any(m.config.variance for m in self.members) else None
+        variances = np.stack(out_variances) if heads else None
         return [
             (
                 images[:, j].mean(axis=0),

@@ -241,10 +241,7 @@ class PredictionNet(nn.Module):
         k = self.config.hypotheses
         if k == 1:
             dc, memory_out = self._p_step(latent, memory, image, rows)
-            if self.config.architecture == "spatial":
-                difference, log_var = self.decoder.decode(dc, image)
-            else:
-                difference, log_var = self.decoder(dc, image), None
+            difference, log_var = self.decoder.decode(dc, image)
             next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
             return (
                 next_latent,

@@ -213,6 +213,53 @@ def test_object_maps_mark_each_kind_where_the_camera_sees_it(scene):
     assert object_maps(hidden, 16)[KINDS.index("ball")].max() == 0  # not seen: not drawn
 
 
+def test_place_maps_find_the_clauses_subject_and_other_object(scene):
+    from afford.words.data import place_maps
+    from afford.words.facts import Fact
+
+    scene.reset([O.upright("cup", -0.1, 0.25), O.upright("ball", 0.1, 0.25)])
+    s = State.of_scene(scene)
+    cup, ball = s.slots.index("cup0"), s.slots.index("ball0")
+    maps = place_maps(s, Fact("left_of", cup, ball), 16)
+    assert maps.shape == (2, 16, 16) and np.allclose(maps.sum((1, 2)), 1.0)
+    expected = object_maps_peaks(s, (cup, ball))
+    assert [np.unravel_index(m.argmax(), (16, 16)) for m in maps] == expected
+    on_table = place_maps(s, Fact("on", ball, "table"), 16)
+    assert on_table[1].sum() == 0  # a word, not an object: nothing to find
+    hidden = State(s.poses, s.held, s.slots, s.members, frozenset({ball}))
+    assert place_maps(hidden, Fact("left_of", ball, cup), 16)[0].sum() == 0  # not seen
+
+
+def object_maps_peaks(s: State, slots) -> list[tuple[int, int]]:
+    from afford.sim import camera
+
+    cells = []
+    for k in slots:
+        col, row = camera.world_to_pixel(s.poses[k][None, :3].astype(float))[0] / 8
+        cells.append((int(row), int(col)))
+    return cells
+
+
+def test_the_grounding_loss_is_low_on_the_named_objects_and_skips_missing_ones():
+    import torch
+
+    from afford.words.train import grounding_loss
+
+    places = torch.zeros((2, 2, 4, 4))
+    places[0, 0, 1, 2] = 1.0  # the subject at cell (1, 2); no other object (a word)
+    places[1, 0, 3, 0] = places[1, 1, 0, 3] = 1.0
+    right = torch.full((2, 2, 16), -10.0)
+    right[0, 0, 1 * 4 + 2] = right[1, 0, 3 * 4 + 0] = right[1, 1, 0 * 4 + 3] = 10.0
+    right.requires_grad_(True)
+    loss = grounding_loss(right, places)
+    assert float(loss.detach()) < 1e-6
+    wrong = torch.zeros((2, 2, 16), requires_grad=True)
+    bad = grounding_loss(wrong, places)
+    assert float(bad) == pytest.approx(np.log(16), rel=1e-5)  # uniform maps: log(cells)
+    bad.backward()
+    assert float(wrong.grad[0, 1].abs().sum()) == 0.0  # the map with nothing to find: untaught
+
+
 def test_the_shipped_agreement_model_ranks_the_state_a_sentence_describes_first(scene):
     """A hand-made pair: a cup on the block's left end, and the same cup on the table."""
     import torch
@@ -230,3 +277,20 @@ def test_the_shipped_agreement_model_ranks_the_state_a_sentence_describes_first(
         on_block = net.statement_logprob(states, "the cup is on the block")
         on_table = net.statement_logprob(states, "the cup is on the table and the ball is on the table")
     assert on_block[0] > on_block[1] and on_table[1] > on_table[0]
+
+
+def test_training_goals_with_grounded_maps_logs_each_loss(small_dataset, tmp_path):
+    import json
+
+    from afford.words.config import PRESETS
+    from afford.words.train import train
+
+    config = dataclasses.replace(
+        PRESETS["tiny"], readout="attend", loss_objects=1.0, loss_ground=1.0, steps=6, log_every=2, threads=1
+    )
+    train(small_dataset, config, tmp_path, progress=False)
+    logged = [json.loads(line) for line in (tmp_path / "log.jsonl").read_text().splitlines()]
+    losses = [row for row in logged if "train/ground" in row]
+    assert losses and all(np.isfinite(row["train/ground"]) and row["train/ground"] > 0 for row in losses)
+    with pytest.raises(ValueError, match="readout=attend"):
+        train(small_dataset, dataclasses.replace(config, readout="pool"), tmp_path / "pool", progress=False)

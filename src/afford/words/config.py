@@ -27,6 +27,11 @@ class AgreementConfig:
     # cup, a ball, a support or the block is centred there (true poses, through the camera),
     # so that the stem learns to see the objects and where they are, whatever the clause.
     loss_objects: float = 0.0
+    # Weight of the "attend" readout's grounding: its first map taught to fall on the clause's
+    # subject and its second on the other object (data.place_maps: true poses through the
+    # camera; cross-entropy against a bump), so the centres the head compares are the objects
+    # the clause names, not whatever the clause alone lets the maps settle on.
+    loss_ground: float = 0.0
     # The words the model reads, in token-id order: filled from words/sentences.vocabulary()
     # when training starts, and kept with the weights.
     vocabulary: tuple[str, ...] = ()

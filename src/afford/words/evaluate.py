@@ -34,10 +34,10 @@ def scores(net: AgreementNet, data: ClauseData, picks: list[int], seed: int = 0,
     draws = [k for k in picks for _ in range(DRAWS_PER_STATE)]
     out = ([], [], [])
     for b in tqdm(range(0, len(draws), BATCH), disable=not progress, desc="score", unit="batch", leave=False):
-        images, texts, truths, relations, _ = collate_clauses([data[k] for k in draws[b : b + BATCH]])
-        out[0].append(net(images, net.token_ids(texts)).numpy())
-        out[1].append(truths.numpy())
-        out[2].append(relations.numpy())
+        batch = collate_clauses([data[k] for k in draws[b : b + BATCH]])
+        out[0].append(net(batch.images, net.token_ids(batch.texts)).numpy())
+        out[1].append(batch.truths.numpy())
+        out[2].append(batch.relations.numpy())
     return tuple(np.concatenate(x) for x in out)
 
 

@@ -119,18 +119,27 @@ class AgreementNet(nn.Module):
     def judge(self, grid: torch.Tensor, ids: torch.Tensor) -> torch.Tensor:
         """Logits (B,) of clauses (B, T) on the stem's grids (B, width, h, w): the stem reads an
         image once however many clauses are asked of it."""
+        return self.judge_and_attend(grid, ids)[0]
+
+    def judge_and_attend(
+        self, grid: torch.Tensor, ids: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """`judge`'s logits and the "attend" readout's map logits (B, ATTENDED, h*w) (None for
+        "pool"): the maps are where the clause's subject and its other object were looked for."""
         t = self.encode_text(ids)
         x = grid
         for block in self.blocks:
             x = block(x, t)
         parts = [x.amax((2, 3)), x.mean((2, 3)), t]
+        maps = None
         if self.config.readout == "attend":
-            weights = torch.softmax(self.attend(x).flatten(2), -1)  # (B, ATTENDED, h*w)
+            maps = self.attend(x).flatten(2)
+            weights = torch.softmax(maps, -1)  # (B, ATTENDED, h*w)
             where = grid_coordinates(x).flatten(1)  # (2, h*w)
             centres = weights @ where.T  # (B, ATTENDED, 2): column, row in [-1, 1]
             parts += [(weights @ x.flatten(2).transpose(1, 2)).flatten(1), centres.flatten(1)]
             parts.append(centres[:, 0] - centres[:, 1])
-        return self.head(torch.cat(parts, 1))[:, 0]
+        return self.head(torch.cat(parts, 1))[:, 0], maps
 
     def statement_logprob(self, images: torch.Tensor, statement: str) -> torch.Tensor:
         """(B,) log-probability that every clause of `statement` holds in each image

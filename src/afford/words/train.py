@@ -16,7 +16,7 @@ from afford.data.predicted import PredictedStates, mixed_sampler
 from afford.training.distributed import World
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.words.config import AgreementConfig
-from afford.words.data import ClauseData, collate_clauses
+from afford.words.data import ClauseBatch, ClauseData, collate_clauses
 from afford.words.metrics import roc_auc
 from afford.words.model import AgreementNet
 from afford.words.sentences import vocabulary
@@ -24,7 +24,19 @@ from afford.words.sentences import vocabulary
 VAL_DRAWS = 512  # clauses of the validation set, drawn once
 
 
-def fixed_draws(data: ClauseData, n: int, seed: int) -> tuple:
+def grounding_loss(maps: torch.Tensor, places: torch.Tensor) -> torch.Tensor:
+    """Cross-entropy of the readout's map logits (B, 2, h*w) against where the clause's objects
+    are (places (B, 2, h, w), each map a bump summing to 1, or zeros where there is none to
+    find), over the maps that have one."""
+    target = places.flatten(2)
+    found = target.sum(-1) > 0
+    if not found.any():
+        return maps.sum() * 0.0
+    ce = -(target * torch.log_softmax(maps, -1)).sum(-1)
+    return ce[found].mean()
+
+
+def fixed_draws(data: ClauseData, n: int, seed: int) -> ClauseBatch:
     """n draws of `data` made once, with their own stream: the same set at every evaluation."""
     data.rng = np.random.default_rng(seed)
     picks = np.random.default_rng(seed).integers(len(data), size=min(n, len(data)))
@@ -65,32 +77,37 @@ def train(
         collate_fn=collate_clauses,
         **({"sampler": sampler} if sampler is not None else {"shuffle": True}),
     )
-    val_images, val_texts, val_truths, _, _ = fixed_draws(ClauseData(data, "val"), VAL_DRAWS, config.seed)
+    val = fixed_draws(ClauseData(data, "val"), VAL_DRAWS, config.seed)
     net = AgreementNet(config)
-    val_ids = net.token_ids(val_texts)
+    if config.loss_ground and config.readout != "attend":
+        raise ValueError('loss_ground teaches the "attend" readout\'s maps: set readout=attend')
+    val_ids = net.token_ids(val.texts)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     bce = nn.BCEWithLogitsLoss()
 
-    def train_step(batch):
-        images, texts, truths, _, maps = batch
-        if not config.loss_objects:
-            return bce(net(images, net.token_ids(texts)), truths), {}
-        grid = net.read(images)
-        clauses = bce(net.judge(grid, net.token_ids(texts)), truths)
-        objects = bce(net.objects(grid), maps)  # the stem taught to see the objects
-        return clauses + config.loss_objects * objects, {
-            "clauses": float(clauses.detach()),
-            "objects": float(objects.detach()),
-        }
+    def train_step(batch: ClauseBatch):
+        grid = net.read(batch.images)
+        logits, maps = net.judge_and_attend(grid, net.token_ids(batch.texts))
+        clauses = bce(logits, batch.truths)
+        loss, parts = clauses, {"clauses": float(clauses.detach())}
+        if config.loss_objects:
+            objects = bce(net.objects(grid), batch.objects)  # the stem taught to see the objects
+            loss = loss + config.loss_objects * objects
+            parts["objects"] = float(objects.detach())
+        if config.loss_ground:
+            ground = grounding_loss(maps, batch.places)
+            loss = loss + config.loss_ground * ground
+            parts["ground"] = float(ground.detach())
+        return loss, parts
 
     def validate() -> dict[str, float]:
         logits = torch.cat(
-            [net(val_images[i : i + 128], val_ids[i : i + 128]) for i in range(0, len(val_ids), 128)]
+            [net(val.images[i : i + 128], val_ids[i : i + 128]) for i in range(0, len(val_ids), 128)]
         )
         return {
-            "loss": float(bce(logits, val_truths)),
-            "accuracy": float(((logits > 0).float() == val_truths).float().mean()),
-            "auc": roc_auc(logits.numpy(), val_truths.numpy()),
+            "loss": float(bce(logits, val.truths)),
+            "accuracy": float(((logits > 0).float() == val.truths).float().mean()),
+            "auc": roc_auc(logits.numpy(), val.truths.numpy()),
         }
 
     loop = Loop(

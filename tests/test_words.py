@@ -89,8 +89,8 @@ def test_sampled_statements_are_as_true_as_asked_and_read_back(scene):
     assert made >= 30
 
 
-@pytest.mark.parametrize("readout", ["pool", "attend"])
-def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words(readout):
+@pytest.mark.parametrize("readout, geometry", [("pool", False), ("attend", False), ("attend", True)])
+def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words(readout, geometry):
     import torch
 
     from afford.words.config import PRESETS
@@ -98,7 +98,9 @@ def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words(reado
     from afford.words.sentences import vocabulary
 
     torch.manual_seed(0)
-    config = dataclasses.replace(PRESETS["tiny"], vocabulary=tuple(vocabulary()), readout=readout)
+    config = dataclasses.replace(
+        PRESETS["tiny"], vocabulary=tuple(vocabulary()), readout=readout, geometry=geometry
+    )
     net = AgreementNet(config)
     # Images that differ only in a bright patch on the left or the right; "the cup is left of
     # the ball" is made true for the first kind and false for the second, and its negation the
@@ -294,3 +296,23 @@ def test_training_goals_with_grounded_maps_logs_each_loss(small_dataset, tmp_pat
     assert losses and all(np.isfinite(row["train/ground"]) and row["train/ground"] > 0 for row in losses)
     with pytest.raises(ValueError, match="readout=attend"):
         train(small_dataset, dataclasses.replace(config, readout="pool"), tmp_path / "pool", progress=False)
+
+
+def test_a_model_given_the_geometric_read_loads_one_without_and_judges_alike_until_trained():
+    import torch
+
+    from afford.training.checkpoint import load_model_state
+    from afford.words.config import PRESETS
+    from afford.words.model import AgreementNet
+    from afford.words.sentences import vocabulary
+
+    torch.manual_seed(0)
+    base = dataclasses.replace(PRESETS["tiny"], vocabulary=tuple(vocabulary()), readout="attend")
+    before = AgreementNet(base).eval()
+    after = AgreementNet(dataclasses.replace(base, geometry=True)).eval()
+    load_model_state(after, {f"model.{k}": v for k, v in before.state_dict().items()}, "test")
+    images = torch.rand((3, 4, 128, 128))
+    ids = before.token_ids(["the cup is left of the ball", "the ball is behind the cup", "the cup is gone"])
+    assert torch.allclose(before(images, ids), after(images, ids))
+    with pytest.raises(ValueError, match="readout=attend"):
+        AgreementNet(dataclasses.replace(base, readout="pool", geometry=True))

@@ -32,6 +32,11 @@ class AgreementConfig:
     # camera; cross-entropy against a bump), so the centres the head compares are the objects
     # the clause names, not whatever the clause alone lets the maps settle on.
     loss_ground: float = 0.0
+    # With readout=attend: the clause also weighs, linearly, the two maps' centres and their
+    # offset (in cells), added to the head's logit (model.GEOMETRY). "Left of" is then a sign
+    # on a column difference that the clause chooses, not a product of text and place that the
+    # head's hidden layer must discover among some 360 features.
+    geometry: bool = False
     # The words the model reads, in token-id order: filled from words/sentences.vocabulary()
     # when training starts, and kept with the weights.
     vocabulary: tuple[str, ...] = ()

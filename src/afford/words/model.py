@@ -55,6 +55,7 @@ class FiLMBlock(nn.Module):
 
 READOUTS = ("pool", "attend")
 ATTENDED = 2  # attention maps of the "attend" readout: the clause's subject and its reference
+GEOMETRY = 2 * ATTENDED + 2  # the maps' centres and their offset: what config.geometry weighs
 
 
 class AgreementNet(nn.Module):
@@ -81,6 +82,13 @@ class AgreementNet(nn.Module):
             self.attend = nn.Conv2d(config.width, ATTENDED, 1)
             features += ATTENDED * (config.width + 2) + 2  # each map's features and centre; their offset
         self.head = nn.Sequential(nn.Linear(features, config.head), nn.GELU(), nn.Linear(config.head, 1))
+        if config.geometry:
+            if config.readout != "attend":
+                raise ValueError('geometry weighs the "attend" readout\'s centres: set readout=attend')
+            # Zero at first: a trained model given it starts out judging as it did.
+            self.geometry = nn.Linear(config.text, GEOMETRY + 1)
+            nn.init.zeros_(self.geometry.weight)
+            nn.init.zeros_(self.geometry.bias)
         if config.loss_objects:  # object maps from the stem's grid, a channel per kind (data.object_maps)
             self.objects = nn.Conv2d(config.width, len(KINDS), 1)
 
@@ -139,7 +147,21 @@ class AgreementNet(nn.Module):
             centres = weights @ where.T  # (B, ATTENDED, 2): column, row in [-1, 1]
             parts += [(weights @ x.flatten(2).transpose(1, 2)).flatten(1), centres.flatten(1)]
             parts.append(centres[:, 0] - centres[:, 1])
-        return self.head(torch.cat(parts, 1))[:, 0], maps
+        logits = self.head(torch.cat(parts, 1))[:, 0]
+        if self.config.geometry:
+            # In cells, so that one cell of offset weighs as much as a feature; the clause picks
+            # the sign and the axis ("left of": the column offset; "not behind": minus the row's).
+            cells = x.shape[-1] / 2
+            where = torch.cat([centres.flatten(1), centres[:, 0] - centres[:, 1]], 1) * cells
+            coef = self.geometry(t)
+            logits = logits + (coef[:, :GEOMETRY] * where).sum(1) + coef[:, GEOMETRY]
+        return logits, maps
+
+    def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """Weights of a model without the geometric read for one with it: the read as
+        initialised (zero), the rest as trained."""
+        own = self.state_dict()
+        return {**state, **{n: own[n] for n in own if n.startswith("geometry.") and n not in state}}
 
     def statement_logprob(self, images: torch.Tensor, statement: str) -> torch.Tensor:
         """(B,) log-probability that every clause of `statement` holds in each image

@@ -316,3 +316,24 @@ def test_a_model_given_the_geometric_read_loads_one_without_and_judges_alike_unt
     assert torch.allclose(before(images, ids), after(images, ids))
     with pytest.raises(ValueError, match="readout=attend"):
         AgreementNet(dataclasses.replace(base, readout="pool", geometry=True))
+
+
+def test_the_shipped_agreement_model_reads_left_and_behind_on_a_hand_made_pair(scene):
+    """The same two objects swapped: the clause about their order holds in one image only."""
+    import torch
+
+    from afford.images import to_chw
+    from afford.planning.sentence_goal import load_agreement
+
+    net = load_agreement()
+    images = []
+    for cup, ball in (((-0.1, 0.22), (0.08, 0.36)), ((0.08, 0.36), (-0.1, 0.22))):
+        scene.reset([O.upright("cup", *cup), O.upright("ball", *ball), O.upright("block", 0.0, 0.46)])
+        images.append(scene.observe())
+    states = to_chw(np.stack(images).astype(np.float32))
+    with torch.no_grad():
+        left = net.statement_logprob(states, "the cup is left of the ball")
+        front = net.statement_logprob(states, "the cup is in front of the ball")
+        behind = net.statement_logprob(states, "the ball is behind the cup")
+    for said in (left, front, behind):
+        assert said[0] > np.log(0.5) > said[1]

@@ -62,7 +62,9 @@ class AgreementConfig:
 
 
 PRESETS = {
-    # The shipped model's: measured best (docs/beyond-the-paper.md, goals in words), 39 min on 2 cores.
+    # The shipped model's first stage (39 min on 2 cores); it was then trained on from there, the
+    # last two stages with --set loss_ground=1.0 and then also --set geometry=true
+    # (docs/beyond-the-paper.md, goals in words, has each stage's command and figures).
     "cpu": AgreementConfig(readout="attend", loss_objects=1.0, steps=8000),
     # The design before: pooled readout, no object maps (for comparison).
     "cpu-pool": AgreementConfig(),

@@ -7,7 +7,8 @@ A prediction net with two outcomes per step and a head that weighs them is a mix
 state of the branching tree (planning/branches.py) holds outcomes with probabilities p and
 eq. (5) losses L, so beside the expected loss sum p L it has a standard deviation
 sqrt(sum p (L - sum p L)^2). This plans each task with the score expected loss + risk x that
-standard deviation (sign flipped for a negative goal), executes each plan from perturbed
+standard deviation (sign flipped for a negative goal; what `afford plan --outcomes expected
+--risk R` does), executes each plan from perturbed
 starts, and prints the success rates; then, per task, the best end states of the plain
 expected score with their branch probabilities and losses: whether the head tells a risky
 place from a safe one decides whether any risk weight can.
@@ -38,26 +39,10 @@ def main() -> None:
     from afford.planning.run import perturbed_successes
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
-    from afford.planning.tree import Scores, SearchConfig
+    from afford.planning.tree import SearchConfig
     from afford.shipped import load_learned
     from afford.sim.perturb import Perturbation
     from afford.sim.scene import Scene
-
-    class MixtureRisk(BranchingModel):
-        """Expected eq. (5) over the branches, plus `risk` of their standard deviation."""
-
-        risk = 0.0
-
-        def score(self, goal, nodes):
-            losses = goal.loss(np.concatenate([n.state.images for n in nodes]))
-            ends = np.cumsum([len(n.state.probability) for n in nodes])
-            out = []
-            for n, b in zip(nodes, ends, strict=True):
-                p, loss = n.state.probability, losses[b - len(n.state.probability) : b]
-                mean = p @ loss
-                std = np.sqrt(p @ (loss - mean) ** 2)
-                out.append(mean + (-1.0 if goal.negative else 1.0) * self.risk * std)
-            return Scores(np.array(out))
 
     risks = [float(r) for r in args.risks.split(",")]
     perturbation = Perturbation(*[float(v) for v in args.perturb.split(",")])
@@ -70,8 +55,7 @@ def main() -> None:
         row = {"task": task.name, "risks": {}, "ends": []}
         for risk in risks:
             scene.reset(task.scene)
-            model = MixtureRisk(scene.observe(), nets.recognizer, nets.predictor)
-            model.risk = risk
+            model = BranchingModel(scene.observe(), nets.recognizer, nets.predictor, risk)
             tree = search(model, task.goal, task.max_steps, quiet)
             wins = perturbed_successes(tree.plan, task, scene, perturbation, args.executions)
             row["risks"][risk] = {

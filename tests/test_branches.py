@@ -4,6 +4,7 @@ and the expected eq. (5)."""
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import torch
@@ -100,6 +101,24 @@ def test_the_expected_loss_weighs_each_outcome_by_its_probability():
         branches = Branches(np.array([1 - p_far, p_far]), empty, empty, images)
         return Node((), images[0], branches)
 
-    losses = BranchingModel.score(None, goal, [node(0.1), node(0.6)]).loss
+    plain = SimpleNamespace(risk=0.0)  # the score reads only the model's risk
+    losses = BranchingModel.score(plain, goal, [node(0.1), node(0.6)]).loss
     assert np.allclose(losses, [0.1 * 0.25, 0.6 * 0.25])  # a far outcome costs by how often it follows
     assert Goal(goal.patch, negative=True).best(losses) == 1 and goal.best(losses) == 0
+
+
+def test_with_risk_the_plan_the_net_is_sure_of_wins_at_equal_expected_loss():
+    goal = Goal(np.full((4, 4, 4), 0.5))
+    empty = torch.zeros(1)
+    at = {v: np.full((1, 16, 16, 4), v, np.float32) for v in (0.0, 0.25, 0.5)}
+    # Both expect a squared error of 0.0625 in the window: one for sure (every pixel 0.25 away),
+    # the other at odds of 3 to 1 between the goal itself (0) and an image 0.5 away (0.25).
+    sure = Node((), at[0.25][0], Branches(np.ones(1), empty, empty, at[0.25]))
+    both = np.concatenate([at[0.5], at[0.0]])
+    coin = Node((), both[0], Branches(np.array([0.75, 0.25]), empty, empty, both))
+    plain = BranchingModel.score(SimpleNamespace(risk=0.0), goal, [sure, coin])
+    assert np.allclose(plain.loss, [0.0625, 0.0625]) and np.allclose(plain.spread, [0.0, np.sqrt(3) * 0.0625])
+    averse = BranchingModel.score(SimpleNamespace(risk=1.0), goal, [sure, coin])
+    assert goal.best(averse.loss) == 0  # the sure one
+    negative = Goal(goal.patch, negative=True)
+    assert negative.best(BranchingModel.score(SimpleNamespace(risk=1.0), negative, [sure, coin]).loss) == 0

@@ -123,9 +123,10 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         type=float,
         default=PlannerConfig.risk,
         metavar="W",
-        help="ensemble planner: a plan scores the members' expected goal loss (eq. 5; over their "
-        "variance heads' outcomes too, where they have them) plus W standard deviations of it: "
-        f"risk-averse (default {PlannerConfig.risk}); 0: the expected loss alone",
+        help="ensemble planner, and learned and hybrid planners with --outcomes expected: a plan scores "
+        "its expected goal loss (eq. 5; over the members and their variance heads' outcomes, or over the "
+        "net's branches) plus W standard deviations of it: risk-averse "
+        f"(default {PlannerConfig.risk}); 0: the expected loss alone",
     )
     parser.add_argument(
         "--outcomes",

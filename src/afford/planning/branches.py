@@ -9,7 +9,8 @@ probability of the outcomes that led to it; every action steps every branch, and
 splits into the net's outcomes. A plan then scores the expected eq. (5) over its branches,
 so a plan whose side effect would spoil the goal one time in three pays a third of that, and
 a plan that needs a side effect to happen gets the credit of how likely it is (paper V: "a
-more principled approach" to actions with uncertain outcomes).
+more principled approach" to actions with uncertain outcomes). The branches are a mixture with
+a spread of their own, so a plan may also pay for how unsure its outcome is (`risk`).
 
 Branches less likely than `OUTCOME_FLOOR` are dropped and at most `MOST_BRANCHES` kept per
 state (the likeliest), so a tree costs at most that many times the one-outcome search, and in
@@ -55,7 +56,15 @@ def keep(probability: np.ndarray, floor: float = OUTCOME_FLOOR, most: int = MOST
 
 
 class BranchingModel(LearnedModel):
-    """The learned world model (`LearnedModel`) with every foreseen outcome kept as a branch."""
+    """The learned world model (`LearnedModel`) with every foreseen outcome kept as a branch.
+
+    `risk`: a state scores its expected eq. (5) plus this many standard deviations of eq. (5)
+    over its branches (the mixture's), minus for a negative goal: of two plans expected equally
+    close, the one whose outcome the net is sure of wins. 0: the expected loss alone."""
+
+    def __init__(self, image, recognizer, predictor, risk: float = 0.0):
+        super().__init__(image, recognizer, predictor)
+        self.risk = risk
 
     @torch.no_grad()
     def root(self):
@@ -92,9 +101,14 @@ class BranchingModel(LearnedModel):
         return children
 
     def score(self, goal: Goal, nodes: list[Node]) -> Scores:
-        """Each state's expected eq. (5) over its branches."""
+        """Each state's expected eq. (5) over its branches, `risk` standard deviations added,
+        and that deviation."""
         losses = goal.loss(np.concatenate([n.state.images for n in nodes]))
         sizes = np.array([len(n.state.probability) for n in nodes])
         ends = np.cumsum(sizes)
-        spans = zip(nodes, ends - sizes, ends, strict=True)
-        return Scores(np.array([n.state.probability @ losses[a:b] for n, a, b in spans]))
+        mean, std = np.zeros(len(nodes)), np.zeros(len(nodes))
+        for i, (n, a, b) in enumerate(zip(nodes, ends - sizes, ends, strict=True)):
+            p = n.state.probability
+            mean[i] = p @ losses[a:b]
+            std[i] = np.sqrt(p @ (losses[a:b] - mean[i]) ** 2)
+        return Scores(mean + (-self.risk if goal.negative else self.risk) * std, std)

@@ -24,8 +24,9 @@ class PlannerConfig:
     # The learned planner: optimise the turn angles of the best plan with turns by gradient
     # descent through the prediction net (planning/angles.py) and keep it when it is closer.
     optimise_turns: bool = False
-    # The ensemble planner (planning/uncertain.py): a plan scores eq. (5) averaged over the
-    # members plus this many standard deviations of it (risk-averse); 0 scores the mean alone.
+    # The ensemble planner (planning/uncertain.py), and the learned planners with outcomes
+    # "expected" (planning/branches.py): a plan scores eq. (5) averaged over the members (or the
+    # net's branches) plus this many standard deviations of it (risk-averse); 0: the mean alone.
     risk: float = RISK
     # Plan, execute the first action, look at the real state, plan again with the steps left
     # (planning/closed_loop.py); False: the paper's open loop, the whole plan executed blind.

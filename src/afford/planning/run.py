@@ -29,7 +29,13 @@ from afford.sim.scene import Scene
 
 # How the learned planners use a net that foresees several outcomes per step (PlannerConfig.outcomes):
 # carry on the likeliest, or keep them all as branches and score the expected eq. (5).
-OUTCOME_MODELS = {"likeliest": LearnedModel, "expected": BranchingModel}
+# (image, learned nets, config) -> the world model; "expected" takes the planner's risk.
+OUTCOME_MODELS = {
+    "likeliest": lambda image, nets, config: LearnedModel(image, nets.recognizer, nets.predictor),
+    "expected": lambda image, nets, config: BranchingModel(
+        image, nets.recognizer, nets.predictor, config.risk
+    ),
+}
 
 DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
 
@@ -65,7 +71,7 @@ def _learned_model(image: np.ndarray, learned, config: PlannerConfig) -> Learned
     """The learned world model from a start image, keeping the outcomes as `config` asks."""
     if config.outcomes not in OUTCOME_MODELS:
         raise UserError(f"outcomes: one of {', '.join(OUTCOME_MODELS)}, not {config.outcomes!r}")
-    return OUTCOME_MODELS[config.outcomes](image, learned.recognizer, learned.predictor)
+    return OUTCOME_MODELS[config.outcomes](image, learned, config)
 
 
 def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:

@@ -113,15 +113,17 @@ def test_the_agreement_net_scores_clauses_learns_and_refuses_unknown_words(reado
     encoded = net.token_ids(clauses)
     truths = torch.tensor([1.0, 0.0] * 2 + [0.0, 1.0] * 2)
     assert net(images, encoded).shape == (8,)
-    opt = torch.optim.Adam(net.parameters(), lr=1e-2)
+    # At lr 1e-2 the geometric read made Adam bounce past the plateau (a loss of 1.9 at step 200
+    # with 2 threads); at 3e-3 every readout is past it by step ~160 with 1 or 2 threads.
+    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
     losses = []
-    for _ in range(200):  # both readouts sit on a plateau for ~100 steps first
+    for _ in range(250):
         loss = torch.nn.functional.binary_cross_entropy_with_logits(net(images, encoded), truths)
         opt.zero_grad()
         loss.backward()
         opt.step()
         losses.append(loss.item())
-    assert losses[-1] < 0.5 * losses[0]
+    assert max(losses[-20:]) < 0.5 * losses[0]
     both = net.statement_logprob(images[:2], "the cup is on the table and the ball is gone")
     assert both.shape == (2,) and bool((both <= 0).all())
     with pytest.raises(SentenceError, match="unknown word 'teapot'"):

@@ -55,6 +55,14 @@ class AgreementConfig:
     threads: int = 2
     seed: int = 0
 
+    def __post_init__(self):
+        # Both options work on the "attend" readout's two maps; a config asking for them without
+        # it is refused wherever it is built (a preset, --set, a checkpoint).
+        if self.loss_ground and self.readout != "attend":
+            raise ValueError('loss_ground teaches the "attend" readout\'s maps: set readout=attend')
+        if self.geometry and self.readout != "attend":
+            raise ValueError('geometry weighs the "attend" readout\'s centres: set readout=attend')
+
     @property
     def grid(self) -> int:
         """The stem's grid size: one cell per 2^len(stem) pixels."""

@@ -82,9 +82,7 @@ class AgreementNet(nn.Module):
             self.attend = nn.Conv2d(config.width, ATTENDED, 1)
             features += ATTENDED * (config.width + 2) + 2  # each map's features and centre; their offset
         self.head = nn.Sequential(nn.Linear(features, config.head), nn.GELU(), nn.Linear(config.head, 1))
-        if config.geometry:
-            if config.readout != "attend":
-                raise ValueError('geometry weighs the "attend" readout\'s centres: set readout=attend')
+        if config.geometry:  # config.__post_init__ saw to readout=attend
             # Zero at first: a trained model given it starts out judging as it did.
             self.geometry = nn.Linear(config.text, GEOMETRY + 1)
             nn.init.zeros_(self.geometry.weight)

@@ -79,8 +79,6 @@ def train(
     )
     val = fixed_draws(ClauseData(data, "val"), VAL_DRAWS, config.seed)
     net = AgreementNet(config)
-    if config.loss_ground and config.readout != "attend":
-        raise ValueError('loss_ground teaches the "attend" readout\'s maps: set readout=attend')
     val_ids = net.token_ids(val.texts)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     bce = nn.BCEWithLogitsLoss()

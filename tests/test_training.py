@@ -168,7 +168,13 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
         with pytest.raises(ValueError, match="between 0 and 1"):
             run_sampler([part], replace(config, **{f"{what}_fraction": 1.5}), seed=0)
     assert run_sampler([part], PRESETS["tiny"], seed=0) is None
-    with pytest.raises(ValueError, match="cannot both"):
+    # Both asked: each kind gets at least its share, the rest comes from sequences with neither.
+    both = replace(PRESETS["tiny"], turn_fraction=0.3, effect_fraction=0.4)
+    weights = run_sampler([part], both, seed=0).weights.numpy()
+    neither = ~(truth["turn"] | truth["effect"])
+    assert weights.sum() == pytest.approx(1.0) and weights[neither].sum() == pytest.approx(0.3)
+    assert weights[truth["turn"]].sum() >= 0.3 - 1e-9 and weights[truth["effect"]].sum() >= 0.4 - 1e-9
+    with pytest.raises(ValueError, match="sum below 1"):
         run_sampler([part], replace(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
 
 

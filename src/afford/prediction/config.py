@@ -83,7 +83,8 @@ class PredictionConfig:
     # a quarter with turns): more turn examples for P^turn, for continuous turn angles (paper V).
     turn_fraction: float = 0.0
     # The share of training runs drawn from sequences with a side effect (data/effects.py; 0: as
-    # the data comes, about 4 in 10 sequences hold one somewhere).
+    # the data comes, about 4 in 10 sequences hold one somewhere). With turn_fraction too, each
+    # share is a floor (a sequence may hold both) and the rest holds neither.
     effect_fraction: float = 0.0
     # Weight of the squared error on the pixels where a step had a side effect, as a mean over
     # those pixels (train.sequence_loss); 0: off, and the batches carry no effect masks.

@@ -124,16 +124,27 @@ def sequence_flags(data: Dataset) -> dict[str, dict[int, bool]]:
     return flags
 
 
-def share_sampler(flagged: np.ndarray, fraction: float, seed: int, what: str) -> WeightedRandomSampler:
-    """Draws runs so that `fraction` of them come from the flagged sequences."""
-    if not 0 < fraction < 1:
-        raise ValueError(f"{what}_fraction must lie between 0 and 1, not {fraction}")
-    if not flagged.any() or flagged.all():
-        raise ValueError(f"{what}_fraction needs training sequences both with and without a {what}")
-    weights = np.where(flagged, fraction / flagged.sum(), (1 - fraction) / (~flagged).sum())
+def share_sampler(flags: dict[str, np.ndarray], shares: dict[str, float], seed: int) -> WeightedRandomSampler:
+    """Draws runs so that `shares[what]` of them come from the sequences `flags[what]` marks
+    and the rest from the sequences no flag marks. With two kinds asked, a sequence marked by
+    both counts to both, so each share is then a floor."""
+    for what, share in shares.items():
+        if not 0 < share < 1:
+            raise ValueError(f"{what}_fraction must lie between 0 and 1, not {share}")
+        if not flags[what].any():
+            raise ValueError(f"{what}_fraction needs training sequences with a {what}")
+    if sum(shares.values()) >= 1:
+        raise ValueError(f"the shares asked ({' + '.join(f'{w}_fraction' for w in shares)}) must sum below 1")
+    rest = ~np.any([flags[what] for what in shares], axis=0)
+    if not rest.any():
+        kinds = " or ".join(shares)
+        raise ValueError(f"the shares asked need training sequences without a {kinds}")
+    weights = (1 - sum(shares.values())) * rest / rest.sum()
+    for what, share in shares.items():
+        weights = weights + share * flags[what] / flags[what].sum()
     return WeightedRandomSampler(
         torch.from_numpy(weights),
-        len(flagged),
+        len(rest),
         replacement=True,
         generator=torch.Generator().manual_seed(seed),
     )
@@ -141,19 +152,18 @@ def share_sampler(flagged: np.ndarray, fraction: float, seed: int, what: str) ->
 
 def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int):
     """The training runs' sampler over the runs of every part in turn: more turns
-    (`turn_fraction`), more side effects (`effect_fraction`), or None (runs as the data comes)."""
+    (`turn_fraction`), more side effects (`effect_fraction`), both, or None (runs as the data
+    comes)."""
     asked = {"turn": config.turn_fraction, "effect": config.effect_fraction}
     asked = {what: share for what, share in asked.items() if share}
     if not asked:
         return None
-    if len(asked) > 1:
-        raise ValueError("turn_fraction and effect_fraction cannot both be set")
-    ((what, share),) = asked.items()
-    flagged = []
+    flags: dict[str, list[bool]] = {what: [] for what in asked}
     for part in parts:
-        flags = sequence_flags(part.data)[what]
-        flagged += [flags[i] for i in part.indices]
-    return share_sampler(np.array(flagged), share, seed, what)
+        marks = sequence_flags(part.data)
+        for what in asked:
+            flags[what] += [marks[what][i] for i in part.indices]
+    return share_sampler({what: np.array(f) for what, f in flags.items()}, asked, seed)
 
 
 # config.trained -> whether a parameter (by name) learns.

@@ -65,7 +65,7 @@ def main() -> None:
         # The descent's curves, for the picture: the best plan with a turn of the plain search.
         scene.reset(task.scene)
         model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
-        tree = search(model, task.goal, task.max_steps, plain)
+        tree = search(model, task.goal, task.max_steps, plain.search)
         with_turn = [n for n in tree.nodes if any(a.turn for a in n.plan)]
         if with_turn:
             best = min(with_turn, key=lambda n: n.loss)

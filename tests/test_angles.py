@@ -85,3 +85,31 @@ def test_the_planner_keeps_the_optimised_plan_only_when_it_comes_closer():
     assert [n.depth for n in r.path()] == [0, 1]
     kept = with_optimised_turns(searched, model, Goal(goal.patch, negative=True))
     assert kept is searched  # a negative goal is left alone
+
+
+def test_the_shipped_continuous_turn_net_predicts_the_goal_angle_best():
+    """The shipped continuous-turn net (weights/continuous, sharing the recognition net) on the
+    task of aligning a bare block to 30 degrees: over a sweep of angles its predicted eq. (5) is
+    least near 30 or -150 (the block is symmetric), not at an end of the range or at +-90."""
+    from afford.planning.tasks import load_task
+    from afford.shipped import CONTINUOUS, RECOGNITION_FILE, WEIGHTS, find_weights, load_learned
+    from afford.sim.affordance import encode_affordance
+    from afford.sim.scene import Scene
+
+    rec, _ = find_weights(CONTINUOUS)
+    assert rec == WEIGHTS / RECOGNITION_FILE
+    net = load_learned(CONTINUOUS).predictor
+    scene = Scene()
+    task = load_task("tasks/continuous/01-align-30.json", scene)
+    scene.reset(task.scene)
+    image = torch.from_numpy(np.ascontiguousarray(scene.observe().transpose(2, 0, 1)))[None]
+    block_turn = next(a for a in scene.affordances() if a.type == "turn")
+    angles = np.arange(-180, 181, 10)
+    rows = torch.from_numpy(
+        np.stack([encode_affordance(block_turn.with_turn(float(a) or 1e-3)) for a in angles])
+    )
+    with torch.no_grad():
+        ends = net.rollout(image.expand(len(angles), -1, -1, -1), rows[:, None])[:, -1]
+    losses = task.goal.loss_torch(ends).numpy()
+    best = angles[int(losses.argmin())]
+    assert abs((best - 30 + 90) % 180 - 90) <= 20, (best, losses.round(4))

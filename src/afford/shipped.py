@@ -19,6 +19,9 @@ WEIGHTS = Path(__file__).resolve().parent / "weights"  # shipped with the packag
 RECOGNITION_FILE = "recognition.safetensors"
 PREDICTION_FILE = "prediction.safetensors"
 AGREEMENT_FILE = "agreement.safetensors"  # goal sentences (words/), beside the two nets
+# A prediction net trained on continuous turns (paper V) for `--optimise-turns`, with the shipped
+# recognition net: shipped apart because training on them cost the main net quarter-turn tasks.
+CONTINUOUS = WEIGHTS / "continuous"
 
 
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
@@ -28,7 +31,9 @@ def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
     with best.safetensors.
     """
     root = Path(weights) if weights else WEIGHTS
-    flat = (root / RECOGNITION_FILE, root / PREDICTION_FILE)
+    # A folder inside the shipped one may hold a prediction net alone, and shares the recognition net.
+    shared = WEIGHTS if root.resolve().parent == WEIGHTS and not (root / RECOGNITION_FILE).exists() else root
+    flat = (shared / RECOGNITION_FILE, root / PREDICTION_FILE)
     runs = (root / "recognition" / BEST, root / "prediction" / BEST)
     for rec, pred in (flat, runs):
         if rec.is_file() and pred.is_file():

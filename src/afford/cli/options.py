@@ -27,6 +27,16 @@ def add_weights_argument(parser, detail: bool = False) -> None:
     )
 
 
+def nets_folder(args) -> str | None:
+    """The weights folder a planning command asked for: `--weights`, or with `--optimise-turns`
+    alone the shipped continuous-turn prediction net's (paper V); None: the shipped nets."""
+    if args.weights is None and getattr(args, "optimise_turns", False):
+        from afford.shipped import CONTINUOUS
+
+        return str(CONTINUOUS)
+    return args.weights
+
+
 def load_nets(weights: str | None):
     """The trained nets of a weights folder (None: the ones shipped in the package); one line
     if it holds none."""
@@ -116,7 +126,8 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         action="store_true",
         help="learned planner: optimise the turn angles of the best plan with turns by gradient descent "
         "on eq. 5 through the prediction net (paper V), keeping it when it comes closer; needs a "
-        "prediction net trained on continuous turns (afford generate --turn-angles continuous)",
+        "prediction net trained on continuous turns: without --weights, the one shipped for it "
+        "(weights/continuous)",
     )
     parser.add_argument(
         "--risk",

@@ -17,6 +17,7 @@ from afford.cli.options import (
     add_weights_argument,
     check_closed_loop,
     load_nets,
+    nets_folder,
     planner_config,
 )
 from afford.cli.options import perturbation as perturbation_of
@@ -48,7 +49,7 @@ def cmd_plan(args) -> int:
         task = load_task(args.task, scene)
     bind_weights(task.goal, args.weights)
     perturbation = perturbation_of(args)
-    learned = load_nets(args.weights) if args.planner in USES_NETS else None
+    learned = load_nets(nets_folder(args)) if args.planner in USES_NETS else None
     config = planner_config(args, progress=not args.json)
     outcome = solve(task, args.planner, scene, config, learned)
     if perturbation is not None:
@@ -102,7 +103,7 @@ def cmd_bench_tasks(args) -> int:
     planners = planner_names(args.planner)
     check_closed_loop(args, planners)
     perturbation = perturbation_of(args)
-    learned = load_nets(args.weights) if any(p in USES_NETS for p in planners) else None
+    learned = load_nets(nets_folder(args)) if any(p in USES_NETS for p in planners) else None
     config = planner_config(args, progress=False)
     scene = Scene()
     report = {}
@@ -180,12 +181,12 @@ def cmd_bench_random(args) -> int:
     planners = planner_names(args.planner)
     check_closed_loop(args, planners)
     if any(p in USES_NETS for p in planners):
-        load_nets(args.weights)  # a missing weights folder is one line here, not a worker's traceback
+        load_nets(nets_folder(args))  # a missing weights folder is one line here, not a worker's traceback
     threads = max(1, (os.cpu_count() or 1) // args.workers)
     spec = BenchSpec(
         max_steps=args.max_steps,
         planners=planners,
-        weights=args.weights,
+        weights=nets_folder(args),
         time_limit=args.time_limit,
         threads=threads,
         min_steps=args.min_steps,

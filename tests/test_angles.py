@@ -91,6 +91,7 @@ def test_the_shipped_continuous_turn_net_predicts_the_goal_angle_best():
     """The shipped continuous-turn net (weights/continuous, sharing the recognition net) on the
     task of aligning a bare block to 30 degrees: over a sweep of angles its predicted eq. (5) is
     least near 30 or -150 (the block is symmetric), not at an end of the range or at +-90."""
+    from afford.images import to_chw
     from afford.planning.tasks import load_task
     from afford.shipped import CONTINUOUS, RECOGNITION_FILE, WEIGHTS, find_weights, load_learned
     from afford.sim.affordance import encode_affordance
@@ -102,7 +103,7 @@ def test_the_shipped_continuous_turn_net_predicts_the_goal_angle_best():
     scene = Scene()
     task = load_task("tasks/continuous/01-align-30.json", scene)
     scene.reset(task.scene)
-    image = torch.from_numpy(np.ascontiguousarray(scene.observe().transpose(2, 0, 1)))[None]
+    image = to_chw(scene.observe()[None])
     block_turn = next(a for a in scene.affordances() if a.type == "turn")
     angles = np.arange(-180, 181, 10)
     rows = torch.from_numpy(

@@ -143,10 +143,10 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         "--outcomes",
         choices=("likeliest", "expected"),
         default=PlannerConfig.outcomes,
-        help="learned and hybrid planners, with a prediction net that foresees two outcomes per step (a "
-        "canonical one and a side effect): likeliest, each step carries on the one its head finds likelier "
-        "(default); expected, both are kept as branches and a plan scores its expected goal loss (eq. 5) "
-        "over them",
+        help="learned, hybrid and ensemble planners, with prediction nets that foresee two outcomes per "
+        "step (a canonical one and a side effect): likeliest, each step carries on the one its head finds "
+        "likelier (default); expected, both are kept as branches (per member, for the ensemble) and a plan "
+        "scores its expected goal loss (eq. 5) over them",
     )
     parser.add_argument(
         "--closed-loop",

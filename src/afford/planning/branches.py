@@ -103,12 +103,19 @@ class BranchingModel(LearnedModel):
     def score(self, goal: Goal, nodes: list[Node]) -> Scores:
         """Each state's expected eq. (5) over its branches, `risk` standard deviations added,
         and that deviation."""
-        losses = goal.loss(np.concatenate([n.state.images for n in nodes]))
-        sizes = np.array([len(n.state.probability) for n in nodes])
-        ends = np.cumsum(sizes)
-        mean, std = np.zeros(len(nodes)), np.zeros(len(nodes))
-        for i, (n, a, b) in enumerate(zip(nodes, ends - sizes, ends, strict=True)):
-            p = n.state.probability
-            mean[i] = p @ losses[a:b]
-            std[i] = np.sqrt(p @ (losses[a:b] - mean[i]) ** 2)
+        mean, variance = branch_moments(goal, [n.state for n in nodes])
+        std = np.sqrt(variance)
         return Scores(mean + (-self.risk if goal.negative else self.risk) * std, std)
+
+
+def branch_moments(goal: Goal, states: list[Branches]) -> tuple[np.ndarray, np.ndarray]:
+    """Per state, the mean and variance of eq. (5) over its branches, each weighed by its
+    probability: the mixture's moments."""
+    losses = goal.loss(np.concatenate([s.images for s in states]))
+    sizes = np.array([len(s.probability) for s in states])
+    ends = np.cumsum(sizes)
+    mean, variance = np.zeros(len(states)), np.zeros(len(states))
+    for i, (s, a, b) in enumerate(zip(states, ends - sizes, ends, strict=True)):
+        mean[i] = s.probability @ losses[a:b]
+        variance[i] = s.probability @ (losses[a:b] - mean[i]) ** 2
+    return mean, variance

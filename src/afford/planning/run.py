@@ -21,7 +21,7 @@ from afford.planning.strategies import search
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchResult
-from afford.planning.uncertain import EnsembleModel
+from afford.planning.uncertain import EnsembleBranchingModel, EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.constants import TOLERANCES
 from afford.sim.perturb import Perturbation, piles, reset_perturbed
@@ -34,6 +34,15 @@ OUTCOME_MODELS = {
     "likeliest": lambda image, nets, config: LearnedModel(image, nets.recognizer, nets.predictor),
     "expected": lambda image, nets, config: BranchingModel(
         image, nets.recognizer, nets.predictor, config.risk
+    ),
+}
+
+# The same for the ensemble planner: each member carries on its likeliest outcome, or keeps
+# every outcome as a branch. (image, learned nets, config) -> the world model.
+ENSEMBLE_MODELS = {
+    "likeliest": lambda image, nets, config: EnsembleModel(image, nets.recognizer, nets.members, config.risk),
+    "expected": lambda image, nets, config: EnsembleBranchingModel(
+        image, nets.recognizer, nets.members, config.risk
     ),
 }
 
@@ -69,9 +78,13 @@ def _nets(learned):
 
 def _learned_model(image: np.ndarray, learned, config: PlannerConfig) -> LearnedModel:
     """The learned world model from a start image, keeping the outcomes as `config` asks."""
-    if config.outcomes not in OUTCOME_MODELS:
-        raise UserError(f"outcomes: one of {', '.join(OUTCOME_MODELS)}, not {config.outcomes!r}")
-    return OUTCOME_MODELS[config.outcomes](image, learned, config)
+    return _outcome_model(OUTCOME_MODELS, image, learned, config)
+
+
+def _outcome_model(models: dict, image: np.ndarray, learned, config: PlannerConfig):
+    if config.outcomes not in models:
+        raise UserError(f"outcomes: one of {', '.join(models)}, not {config.outcomes!r}")
+    return models[config.outcomes](image, learned, config)
 
 
 def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
@@ -92,7 +105,7 @@ def _learned_search(task: Task, scene: Scene, config: PlannerConfig, learned, st
 
 
 def _ensemble_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
-    model = EnsembleModel(scene.observe(), learned.recognizer, learned.members, config.risk)
+    model = _outcome_model(ENSEMBLE_MODELS, scene.observe(), learned, config)
     return search(model, task.goal, steps, config.search)
 
 

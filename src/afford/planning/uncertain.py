@@ -17,6 +17,11 @@ Gauss-Hermite quadrature, z = -sqrt(3), 0, sqrt(3) with weights 1/6, 2/3, 1/6 (e
 mean and variance of a polynomial in z of degree up to 2, which a window's squared error is),
 so each member gives a mean and a variance of its loss; the plan's are their mean and the mean
 of the variances plus the variance of the means (the law of total variance).
+
+Members that foresee two outcomes per step (a canonical one and a side effect, with a head
+that says how likely each is) may also keep both (`EnsembleBranchingModel`, `--outcomes
+expected`): each member then holds its own branches (planning/branches.py), its loss is their
+mixture's mean and variance, and the plan's moments are again the members' combined so.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ import torch
 
 from afford.errors import UserError
 from afford.images import to_chw, to_hwc
+from afford.planning.branches import Branches, BranchingModel, branch_moments
 from afford.planning.goal import Goal
 from afford.planning.learned import recognise_nodes
 from afford.planning.tree import Node, Recognised, Scores, WorldModel
@@ -167,3 +173,57 @@ class EnsembleModel(WorldModel):
         mean, within = quadrature_losses(goal, stacked, variances)
         shape = (len(nodes), k)
         return Scores(*risk_score(mean.reshape(shape).T, self.risk, goal.negative, within.reshape(shape).T))
+
+
+@dataclass
+class _MemberView:
+    """One member's part of an ensemble node, as a member's own `BranchingModel` reads it."""
+
+    state: Branches
+
+
+class EnsembleBranchingModel(WorldModel):
+    """K prediction nets, each keeping every outcome it foresees as a branch: a state is K
+    sets of branches. Recognition runs on the members' mean of their likeliest images; a plan
+    scores the members' mean expected eq. (5) plus `risk` standard deviations, the variance
+    the members' mean mixture variance plus the variance of their expected losses."""
+
+    def __init__(
+        self, image: np.ndarray, recognizer: Recognizer, members: tuple[PredictionNet, ...], risk: float
+    ):
+        if not members or (len(members) < 2 and members[0].config.hypotheses < 2):
+            raise EnsembleError(
+                "an ensemble that keeps outcomes needs at least 2 prediction nets, or one that "
+                "foresees two outcomes per step: put the members in the weights folder's ensemble/ "
+                "(`afford export --member`), beside its prediction net"
+            )
+        self.recognizer = recognizer
+        self.models = [BranchingModel(image, recognizer, m) for m in members]
+        self.risk = risk
+
+    @property
+    def p_steps(self) -> int:
+        return sum(m.p_steps for m in self.models)
+
+    def root(self):
+        roots = [m.root() for m in self.models]
+        return roots[0][0], tuple(state for _, state in roots)
+
+    def recognise(self, nodes: list[Node]) -> list[Recognised]:
+        return recognise_nodes(self.recognizer, nodes)
+
+    def predict(self, parents: list[Node], actions: list[Affordance]):
+        per_member = [
+            model.predict([_MemberView(p.state[k]) for p in parents], actions)
+            for k, model in enumerate(self.models)
+        ]
+        return [
+            (np.mean([m[j][0] for m in per_member], axis=0), tuple(m[j][1] for m in per_member))
+            for j in range(len(parents))
+        ]
+
+    def score(self, goal: Goal, nodes: list[Node]) -> Scores:
+        moments = [branch_moments(goal, [n.state[k] for n in nodes]) for k in range(len(self.models))]
+        means = np.stack([m for m, _ in moments])  # (K, B)
+        within = np.stack([v for _, v in moments])
+        return Scores(*risk_score(means, self.risk, goal.negative, within))

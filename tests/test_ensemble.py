@@ -161,11 +161,15 @@ def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, cap
         ("member", PredictionNet(PRED["tiny"]), PRED["tiny"], "prediction"),
     ):
         save_checkpoint(runs / name / "best.safetensors", net, kind, asdict(config), 1)
+    # A member's head calibration goes into its config, as the main prediction net's does.
+    (runs / "member" / "calibration.json").write_text(json.dumps({"choice_scale": 0.5, "choice_bias": -1.0}))
     pair = ["export", "--recognition", str(runs / "recognition"), "--prediction", str(runs / "prediction")]
     assert main([*pair, "--out", str(tmp_path / "alone")]) == 0
     assert main([*pair, "--member", str(runs / "member"), "--out", str(tmp_path / "two")]) == 0
     assert (tmp_path / "two" / "ensemble" / "prediction-1.safetensors").is_file()
-    assert len(load_learned(tmp_path / "two").members) == 2
+    members = load_learned(tmp_path / "two").members
+    head = (members[1].config.choice_scale, members[1].config.choice_bias)
+    assert len(members) == 2 and head == (0.5, -1.0)
     capsys.readouterr()
     task = "tasks/uncertain/01-cup-near-a-tipping-edge.json"
     plan = ["plan", "--task", task, "--planner", "ensemble", "--out", str(tmp_path / "out")]

@@ -156,10 +156,10 @@ def _check_run(run: str) -> None:
 
 def cmd_export(args) -> int:
     """Ship a trained pair: weights only, the tuned cut-off inside (and a two-outcome prediction
-    net's head calibration, RUN/calibration.json, in its config). The prediction net goes in
-    float16 (half the size, the same predictions to the eye); the recognition net stays in
-    float32, since float16 moved detections across the cut-off (one of 797 on the train
-    states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
+    net's head calibration, RUN/calibration.json, in its config, as each member's). The
+    prediction net goes in float16 (half the size, the same predictions to the eye); the
+    recognition net stays in float32, since float16 moved detections across the cut-off (one
+    of 797 on the train states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
     from afford.prediction.calibration import read_calibration
     from afford.prediction.ensemble import MEMBERS_DIR
     from afford.recognition.infer import read_threshold
@@ -184,7 +184,9 @@ def cmd_export(args) -> int:
     for k, run in enumerate(members, start=1):
         name = f"{MEMBERS_DIR}/prediction-{k}.safetensors"
         (out / MEMBERS_DIR).mkdir(parents=True, exist_ok=True)
-        sizes[name] = export_weights(run / args.checkpoint, out / name, "prediction")
+        sizes[name] = export_weights(
+            run / args.checkpoint, out / name, "prediction", config=read_calibration(run)
+        )
     for name, size in sizes.items():
         print(f"{out / name}: {size / 2**20:.1f} MiB")
     return 0

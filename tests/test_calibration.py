@@ -43,3 +43,22 @@ def test_the_net_reads_its_head_through_the_calibration_and_export_keeps_it(tmp_
     )
     _, config = load_net(tmp_path / "w.safetensors")
     assert (config.choice_scale, config.choice_bias) == (0.5, -1.0)
+
+
+def test_eval_draws_each_outcome_forced_beside_the_heads_pick(tmp_path, small_dataset):
+    from afford.prediction.evaluate import evaluate, forced, format_table
+
+    torch.manual_seed(0)
+    net = PredictionNet(EFFECT).eval()
+    images, actions = torch.rand(2, 4, 128, 128), torch.zeros(2, 2, 7)
+    candidates = net.rollout_hypotheses(images, actions)[2]
+    for k in range(2):
+        assert torch.equal(forced(net, k, images, actions), candidates[:, :, k])
+    save_checkpoint(tmp_path / "run" / "best.safetensors", net, "prediction", asdict(EFFECT), 1)
+    result = evaluate(tmp_path / "run" / "best.safetensors", small_dataset)
+    assert len(result["foresight_forced"]) == 2
+    assert (
+        result["foresight_forced"][0]["acted"]["all"]["executions"]
+        == result["foresight"]["acted"]["all"]["executions"]
+    )
+    assert "outcome 2 drawn at every step" in format_table(result)

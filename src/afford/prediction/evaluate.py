@@ -10,6 +10,7 @@ does not beat it has learned nothing of the effects.
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +114,11 @@ def evaluate(
         result[split] = table(errors(net, data, split, limit)[0])
         result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
     result["foresight"] = foresight.measure(net.rollout, data, "test").as_dict()
+    if config.hypotheses > 1:  # each outcome forced: what the head's pick gains or loses
+        result["foresight_forced"] = [
+            foresight.measure(partial(forced, net, k), data, "test").as_dict()
+            for k in range(config.hypotheses)
+        ]
     if config.hypotheses == 2 and config.hypotheses_by == "effect":
         from afford.prediction.calibration import calibrate
 
@@ -128,6 +134,13 @@ def evaluate(
     if pictures is not None:
         result["pictures"] = event_pictures(net, data, pictures)
     return result
+
+
+def forced(net: PredictionNet, k: int, images: torch.Tensor, actions: torch.Tensor) -> torch.Tensor:
+    """A many-outcome net's rollout with its k-th outcome drawn at every step, whatever its
+    head picks (the state carried on is still the head's)."""
+    with torch.no_grad():
+        return net.rollout_hypotheses(images, actions)[2][:, :, k]
 
 
 # ---------------------------------------------------------------------------- pictures
@@ -199,6 +212,9 @@ def format_table(result: dict) -> str:
             "foresight, one step from the true state (1: the truth drawn, 0: no better than a copy):",
         ]
         lines.append(foresight.format_foresight(result["foresight"]))
+    for k, forced_k in enumerate(result.get("foresight_forced", ())):
+        lines += ["", f"the same with outcome {k + 1} drawn at every step, whatever the head picks:"]
+        lines.append(foresight.format_foresight(forced_k))
     if "future_recall" in result:
         from afford.prediction.futures import format_futures
 

@@ -12,7 +12,7 @@ from afford.planning.uncertain import QUADRATURE, quadrature_losses, risk_score
 from afford.prediction.config import PRESETS
 from afford.prediction.model import PredictionNet
 from afford.prediction.train import make_optimizer, sequence_loss
-from afford.prediction.variance import LOG_VARIANCE_RANGE, beta_nll, total_variance
+from afford.prediction.variance import LOG_VARIANCE_RANGE, beta_nll, outcome_variance, total_variance
 from afford.training.checkpoint import load_model_state
 
 TINY = PRESETS["tiny"]
@@ -157,3 +157,14 @@ def test_the_variance_calibration_fits_a_scale_on_val(small_dataset):
     assert len(cal.variance) == len(cal.squared) == len(cal.step) > 0 and np.all(cal.variance > 0)
     assert cal.ratio(cal.fitted_scale()) == pytest.approx(1.0, rel=1e-6)
     assert sum(b["pixels"] for b in cal.reliability(4)) == len(cal.pixel_variance)
+
+
+def test_two_outcomes_give_the_variance_of_the_truth_about_the_one_drawn():
+    drawn = torch.rand(2, 4, 8, 8)
+    other = drawn + 0.2  # every channel of every pixel 0.2 away
+    candidates = torch.stack([drawn, other], 1)  # (B, K, C, H, W): the first is the one drawn
+    probability = torch.tensor([[0.75, 0.25], [1.0, 0.0]])
+    variance = outcome_variance(candidates, probability, drawn)
+    assert variance.shape == (2, 8, 8)
+    assert torch.allclose(variance[0], torch.full((8, 8), 0.25 * 0.04))
+    assert torch.all(variance[1] == 0)  # sure of the one drawn

@@ -18,7 +18,7 @@ import numpy as np
 import torch
 
 from afford.prediction.model import PredictionNet
-from afford.prediction.variance import total_variance
+from afford.prediction.variance import outcome_variance, total_variance
 
 MEMBERS_DIR = "ensemble"  # in a weights folder: the members beside its prediction net
 
@@ -135,10 +135,7 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
         for m in members:
             rolled = m.rollout_hypotheses(images[:, 0], actions, lengths)
             outs.append(rolled[0])
-            log_var = rolled[5]
-            variances.append(
-                torch.zeros_like(rolled[0][:, :, 0]) if log_var is None else m.variance(log_var)[:, :, 0]
-            )
+            variances.append(member_variance(m, rolled))
         outs = torch.stack(outs)  # (K, B, L, C, H, W)
         mean = outs.mean(0)
         per_pixel = {
@@ -160,6 +157,19 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
         **{name: np.array(values) for name, values in columns.items()},
         **{f"pixel_{name}": np.concatenate(values) for name, values in pixels.items()},
     )
+
+
+def member_variance(net: PredictionNet, rolled: tuple) -> torch.Tensor:
+    """A member's own variance per pixel of each state it rolled out (B, L, H, W), from its
+    `rollout_hypotheses`: its variance head's, plus, for a net with a side-effect outcome, the
+    spread of its outcomes about the one it drew (`variance.outcome_variance`)."""
+    states, _, candidates, logits, _, log_var = rolled
+    variance = torch.zeros_like(states[:, :, 0]) if log_var is None else net.variance(log_var)[:, :, 0]
+    if candidates is not None and net.config.hypotheses_by == "effect":
+        b, length = logits.shape[:2]
+        probability = net.probabilities(logits.flatten(0, 1)).view(b, length, -1)
+        variance = variance + outcome_variance(candidates.float(), probability, states.float())
+    return variance
 
 
 VARIANCE_RUNS = 300  # runs of each split the variance's calibration rolls out

@@ -9,6 +9,12 @@ Gaussian negative log-likelihood weighted per pixel by sigma^(2 beta), held fixe
 pixels with a large error are not simply given a large variance and forgotten (beta 0.5).
 The image is held fixed in this term: the mean learns exactly as without the head.
 
+A net that draws two outcomes per step (a canonical one and a side effect, with a head that says
+how likely each is) says how unsure it is without a head of its own: the state it carries on is
+one outcome, and the truth is each outcome with the head's probability, so its expected squared
+error per pixel is the probability-weighted squared distance of the outcomes from the one drawn
+(`outcome_variance`).
+
 An ensemble's members each give a mean and a variance; the state's variance is the mean of
 the members' variances plus the variance of their means (the law of total variance, as PETS,
 Chua et al. 2018).
@@ -64,3 +70,13 @@ def total_variance(means: torch.Tensor, variances: torch.Tensor) -> torch.Tensor
     (K, ..., H, W): the mean of the variances plus the variance of the means (averaged over the
     channels), the law of total variance. Zero where the members agree and are sure."""
     return variances.mean(0) + means.var(0, unbiased=False).mean(-3)
+
+
+def outcome_variance(
+    candidates: torch.Tensor, probability: torch.Tensor, drawn: torch.Tensor
+) -> torch.Tensor:
+    """Per pixel (..., H, W), the expected squared distance (averaged over the channels) of a
+    net's K outcomes (..., K, C, H, W), weighed by their probabilities (..., K), from the image
+    it drew (..., C, H, W): zero when it is sure or its outcomes agree."""
+    squared = ((candidates - drawn.unsqueeze(-4)) ** 2).mean(-3)
+    return (probability[..., None, None] * squared).sum(-3)

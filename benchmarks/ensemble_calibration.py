@@ -41,6 +41,7 @@ def main() -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
     import numpy as np
     import torch
 
@@ -116,6 +117,7 @@ def main() -> None:
         f"Spearman {report['live_pixel_rank_correlation']:.2f}",
     )
     b.grid(alpha=0.3, which="both")
+    b.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # a narrow range: labels overlap
     rel = report["variance"]["reliability"]
     predicted = np.array([x["predicted"] for x in rel])
     c.loglog(predicted, [x["actual"] for x in rel], "k-o", label="as the weights give it")

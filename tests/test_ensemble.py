@@ -215,8 +215,10 @@ def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scen
     from afford.shipped import load_learned
 
     nets = load_learned()
-    assert len(nets.members) == 4 and nets.members[0] is nets.predictor
+    assert len(nets.members) == 2 and nets.members[0] is nets.predictor
     task = load_task("tasks/uncertain/02-ball-near-a-tipping-edge.json", scene)
     o = solve(task, "ensemble", scene, PlannerConfig(search=SearchConfig(progress=False)), nets)
-    assert o.success and o.plan[-1].type == "place"  # unperturbed, the end place holds
+    # Members trained apart part at the tipping end, so the risk-averse plan places the ball at
+    # the block's centre (the block lies at x = 0), where it holds however the pile stands.
+    assert o.success and o.plan[-1].type == "place" and abs(o.plan[-1].position[0]) < 0.03
     assert 0 < o.spread < o.loss

@@ -28,9 +28,8 @@ def main() -> None:
     import torch
 
     from afford.data.format import Dataset
-    from afford.prediction.calibration import fit_platt, head_logits
+    from afford.prediction.calibration import fit_per_type, fit_platt, head_logits
     from afford.shipped import load_learned
-    from afford.sim.affordance import Col
     from afford.sim.affordances import TYPES
 
     net = load_learned(args.weights).predictor.eval()
@@ -39,18 +38,13 @@ def main() -> None:
     torch.set_num_threads(net.config.threads)
     data = Dataset(args.data)
 
-    def types(split: str) -> np.ndarray:
-        return np.array(
-            [TYPES[int(a[Col.TYPE])] for i in data.indices(split) for a in data.sequence(i).actions]
-        )
-
-    (zv, yv), (zt, yt) = head_logits(net, data, "val"), head_logits(net, data, "test")
-    tv, tt = types("val"), types("test")
+    (zv, yv, tv), (zt, yt, tt) = head_logits(net, data, "val"), head_logits(net, data, "test")
     one = fit_platt(zv, yv)
+    scales, biases = fit_per_type(zv, yv, tv)
     rows = []
-    for kind in TYPES:
-        own = fit_platt(zv[tv == kind], yv[tv == kind])
-        z, y = zt[tt == kind], yt[tt == kind]
+    for k, kind in enumerate(TYPES):
+        own = (scales[k], biases[k])
+        z, y = zt[tt == k], yt[tt == k]
         for name, (a, b) in (("one for all", one), ("per type", own)):
             p = np.clip(1 / (1 + np.exp(-(a * z + b))), 1e-6, 1 - 1e-6)
             picked = p > 0.5

@@ -62,3 +62,24 @@ def test_eval_draws_each_outcome_forced_beside_the_heads_pick(tmp_path, small_da
         == result["foresight"]["acted"]["all"]["executions"]
     )
     assert "outcome 2 drawn at every step" in format_table(result)
+
+
+def test_the_head_is_read_through_its_action_types_own_scaling_where_the_config_has_one():
+    from afford.prediction.calibration import fit_per_type, per_type_logits
+
+    rng = np.random.default_rng(1)
+    z = rng.normal(0, 2, 30_000)
+    kinds = rng.integers(0, 3, len(z))
+    truth = (np.array([0.5, 1.0, 0.8]), np.array([-2.0, -0.5, 0.3]))
+    labels = rng.random(len(z)) < 1 / (1 + np.exp(-per_type_logits(z, kinds, *truth)))
+    scales, biases = fit_per_type(z, labels, kinds)
+    assert np.allclose(scales, truth[0], atol=0.1) and np.allclose(biases, truth[1], atol=0.12)
+    net = PredictionNet(replace(EFFECT, choice_scales=tuple(scales), choice_biases=tuple(biases)))
+    logits = torch.tensor([[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])
+    rows = torch.zeros(3, 7)
+    rows[:, 0] = torch.tensor([0.0, 1.0, 2.0])  # a grasp, a place, a turn
+    side = net.probabilities(logits, rows)[:, 1]
+    assert torch.allclose(side, torch.sigmoid(torch.tensor(scales) + torch.tensor(biases)), atol=1e-6)
+    assert torch.allclose(
+        net.probabilities(logits)[:, 1], torch.sigmoid(torch.tensor(1.0))
+    )  # no rows: one for all

@@ -26,6 +26,8 @@ from afford.data.format import Dataset
 from afford.images import to_chw
 from afford.prediction.foresight import execution_batches
 from afford.prediction.model import PredictionNet
+from afford.sim.affordance import Col
+from afford.sim.affordances import TYPES
 from afford.words.metrics import roc_auc
 
 CALIBRATION_FILE = "calibration.json"  # in a training run, written by `afford eval prediction`
@@ -49,17 +51,35 @@ class HeadReport:
 
 @torch.no_grad()
 def head_logits(net: PredictionNet, data: Dataset, split: str, limit: int | None = None):
-    """(z, labels): the head's side-effect logit for every execution of a split, and whether a
-    side effect followed."""
+    """(z, labels, kinds): the head's side-effect logit for every execution of a split, whether
+    a side effect followed, and the action's type (its index in sim.affordances.TYPES)."""
     z: list[float] = []
     labels: list[bool] = []
+    kinds: list[int] = []
     for batch in execution_batches(data, split, limit, BATCH):
         images = to_chw(np.stack([seq.image(t) for _, seq, t in batch]))
         actions = torch.from_numpy(np.stack([seq.actions[t] for _, seq, t in batch]))[:, None]
         logits = net.rollout_hypotheses(images, actions)[3]
         z.extend((logits[:, 0, 1] - logits[:, 0, 0]).float().tolist())
         labels.extend(not step.canonical for step, _, _ in batch)
-    return np.array(z), np.array(labels)
+        kinds.extend(actions[:, 0, Col.TYPE].long().tolist())
+    return np.array(z), np.array(labels), np.array(kinds)
+
+
+def fit_per_type(z: np.ndarray, labels: np.ndarray, kinds: np.ndarray) -> tuple[list[float], list[float]]:
+    """Platt scaling fitted for each action type alone: (scales, biases) in TYPES order; a type
+    absent from the data keeps the one fitted to all."""
+    every = fit_platt(z, labels)
+    fits = [
+        fit_platt(z[kinds == k], labels[kinds == k]) if np.any(kinds == k) else every
+        for k in range(len(TYPES))
+    ]
+    return [round(a, 4) for a, _ in fits], [round(b, 4) for _, b in fits]
+
+
+def per_type_logits(z: np.ndarray, kinds: np.ndarray, scales: list[float], biases: list[float]) -> np.ndarray:
+    """The logits read through each execution's own type's scaling (as sigmoid(1 * z' + 0))."""
+    return np.array(scales)[kinds] * z + np.array(biases)[kinds]
 
 
 def fit_platt(z: np.ndarray, labels: np.ndarray) -> tuple[float, float]:
@@ -99,13 +119,18 @@ def report(z: np.ndarray, labels: np.ndarray, scale: float, bias: float) -> Head
 
 
 def calibrate(net: PredictionNet, data: Dataset, limit: int | None = None) -> dict:
-    """Platt scaling fitted on val, and the head on val and test with it: a JSON-ready record."""
-    z, y = head_logits(net, data, "val", limit)
+    """Platt scaling fitted on val, one for all action types and one per type, and the head on
+    val and test with each: a JSON-ready record."""
+    z, y, kinds = head_logits(net, data, "val", limit)
     scale, bias = fit_platt(z, y)
+    scales, biases = fit_per_type(z, y, kinds)
     out = {"choice_scale": round(scale, 4), "choice_bias": round(bias, 4), "fitted_on": "val"}
+    out |= {"choice_scales": scales, "choice_biases": biases}
     out["val"] = asdict(report(z, y, scale, bias))
-    z, y = head_logits(net, data, "test", limit)
+    out["val_per_type"] = asdict(report(per_type_logits(z, kinds, scales, biases), y, 1.0, 0.0))
+    z, y, kinds = head_logits(net, data, "test", limit)
     out["test"] = asdict(report(z, y, scale, bias))
+    out["test_per_type"] = asdict(report(per_type_logits(z, kinds, scales, biases), y, 1.0, 0.0))
     return out
 
 
@@ -116,6 +141,8 @@ def read_calibration(run: str | Path) -> dict | None:
         return None
     record = json.loads(path.read_text())
     config = {k: record[k] for k in ("choice_scale", "choice_bias") if k in record}
+    if "choice_scales" in record:  # fitted per action type (absent in runs calibrated before)
+        config |= {k: tuple(record[k]) for k in ("choice_scales", "choice_biases")}
     if "variance" in record:  # the variance head's scale (prediction/ensemble.calibrate_variance)
         config["variance_scale"] = record["variance"]["variance_scale"]
     return config or None
@@ -145,4 +172,15 @@ def _head_lines(record: dict) -> list[str]:
             f"probability {r['mean_raw']:.3f} raw, {r['mean_calibrated']:.3f} calibrated; log-loss "
             f"{r['nll_raw']:.4f} -> {r['nll_calibrated']:.4f}; ROC AUC {r['auc']:.3f}"
         )
+    if "choice_scales" in record:
+        fits = ", ".join(
+            f"{kind} sigmoid({a} z + {b})"
+            for kind, a, b in zip(TYPES, record["choice_scales"], record["choice_biases"], strict=True)
+        )
+        lines.append(f"  per action type (what the config keeps): {fits}")
+        for split in ("val", "test"):
+            r = record[f"{split}_per_type"]
+            lines.append(
+                f"  {split}: mean probability {r['mean_calibrated']:.3f}, log-loss {r['nll_calibrated']:.4f}"
+            )
     return lines

@@ -126,6 +126,11 @@ class PredictionConfig:
     # weighs outcomes by their probability (planning/branches.py) needs them as they come.
     choice_scale: float = 1.0
     choice_bias: float = 0.0
+    # The same fitted per action type (in sim.affordances.TYPES order; empty: the one above for
+    # all). Side effects follow 3% of grasps, 16% of places and 46% of turns, and one scaling
+    # left the head underconfident where places tip the block (benchmarks/place_outcomes.py).
+    choice_scales: tuple[float, ...] = ()
+    choice_biases: tuple[float, ...] = ()
     # What training changes (train.TRAINED): "all"; "outcomes", only the other outcomes' own
     # parts (fork=latent's P^a ends, the choice head), so that fine-tuning a one-outcome net into
     # two keeps its first outcome exactly: what it foresaw, and the plans it found, stay;

@@ -135,7 +135,7 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
         for m in members:
             rolled = m.rollout_hypotheses(images[:, 0], actions, lengths)
             outs.append(rolled[0])
-            variances.append(member_variance(m, rolled))
+            variances.append(member_variance(m, rolled, actions))
         outs = torch.stack(outs)  # (K, B, L, C, H, W)
         mean = outs.mean(0)
         per_pixel = {
@@ -159,15 +159,16 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
     )
 
 
-def member_variance(net: PredictionNet, rolled: tuple) -> torch.Tensor:
+def member_variance(net: PredictionNet, rolled: tuple, actions: torch.Tensor) -> torch.Tensor:
     """A member's own variance per pixel of each state it rolled out (B, L, H, W), from its
-    `rollout_hypotheses`: its variance head's, plus, for a net with a side-effect outcome, the
-    spread of its outcomes about the one it drew (`variance.outcome_variance`)."""
+    `rollout_hypotheses` of `actions` (B, L, 7): its variance head's, plus, for a net with a
+    side-effect outcome, the spread of its outcomes about the one it drew
+    (`variance.outcome_variance`)."""
     states, _, candidates, logits, _, log_var = rolled
     variance = torch.zeros_like(states[:, :, 0]) if log_var is None else net.variance(log_var)[:, :, 0]
     if candidates is not None and net.config.hypotheses_by == "effect":
         b, length = logits.shape[:2]
-        probability = net.probabilities(logits.flatten(0, 1)).view(b, length, -1)
+        probability = net.probabilities(logits.flatten(0, 1), actions.flatten(0, 1)).view(b, length, -1)
         variance = variance + outcome_variance(candidates.float(), probability, states.float())
     return variance
 

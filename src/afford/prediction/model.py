@@ -205,18 +205,23 @@ class PredictionNet(nn.Module):
             next_latent.view(*dc.shape[:2], *next_latent.shape[1:]),
             memory_out,
             candidates,
-            self.probabilities(logits),
+            self.probabilities(logits, rows),
             log_var,
         )
 
-    def probabilities(self, logits: torch.Tensor) -> torch.Tensor:
+    def probabilities(self, logits: torch.Tensor, rows: torch.Tensor | None = None) -> torch.Tensor:
         """(B, K) how likely each outcome is, from the choice head's logits: by effect, the
-        side effect's logit read through the config's calibration; else their softmax."""
+        side effect's logit read through the config's calibration (per action type where the
+        config has one and the action rows (B, 7) are given); else their softmax."""
         logits = logits.float()
         if self.config.hypotheses_by != "effect":
             return logits.softmax(1)
         c = self.config
-        side = torch.sigmoid(c.choice_scale * (logits[:, 1] - logits[:, 0]) + c.choice_bias)
+        scale, bias = torch.tensor(c.choice_scale), torch.tensor(c.choice_bias)
+        if c.choice_scales and rows is not None:
+            kind = rows[:, Col.TYPE].long().cpu()
+            scale, bias = torch.tensor(c.choice_scales)[kind], torch.tensor(c.choice_biases)[kind]
+        side = torch.sigmoid(scale.to(logits.device) * (logits[:, 1] - logits[:, 0]) + bias.to(logits.device))
         return torch.stack([1 - side, side], 1)
 
     def step_with_difference(self, latent, memory, image, rows):
@@ -260,7 +265,7 @@ class PredictionNet(nn.Module):
         elif truth is not None:
             picked = winners(candidates, differences, image, truth)
         elif self.config.hypotheses_by == "effect":
-            picked = (self.probabilities(logits)[:, 1] > self.config.effect_threshold).long()
+            picked = (self.probabilities(logits, rows)[:, 1] > self.config.effect_threshold).long()
         else:
             picked = logits.argmax(1)
         at = torch.arange(b, device=image.device)

@@ -28,10 +28,11 @@ DECIDED = 0.1  # a group with a rate within this of 0 or 1 is decided by what th
 
 def block_axes(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The unit vectors along and across an object's x axis, in the table's plane."""
-    w, x, y, z = pose[3:7]
-    along = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z)])
-    along /= np.linalg.norm(along)
-    return along, np.array([-along[1], along[0]])
+    from afford.data.effects import planar_axes
+
+    along, across = planar_axes(pose)
+    norm = np.linalg.norm(along)
+    return along / norm, across / norm
 
 
 def covered(block: np.ndarray, support: np.ndarray) -> bool:

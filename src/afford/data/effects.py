@@ -108,14 +108,20 @@ def acted_slot(before: np.ndarray, held_before: int, held_after: int, action: np
     return min(present, key=lambda k: float(np.linalg.norm(before[k, :2] - at[:2])))
 
 
+def planar_axes(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An object's x axis projected on the table's plane, and that turned a quarter left: the
+    directions along and across a block (of unit length while it lies flat)."""
+    w, x, y, z = pose[3:7]
+    along = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z)])
+    return along, np.array([-along[1], along[0]])
+
+
 def rested_on(rider: np.ndarray, host: np.ndarray, host_kind: str) -> bool:
     """Was `rider` on top of `host`: above its centre, and over its top face (in the host's
     frame, so a cup beside the long block is not on it)?"""
     if rider[2] < host[2] + EFFECTS.rider_rise:
         return False
-    w, x, y, z = host[3:7]
-    along = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z)])  # the host's x axis, in xy
-    across = np.array([-along[1], along[0]])
+    along, across = planar_axes(host)
     offset = rider[:2] - host[:2]
     half = FOOTPRINT_HALF[host_kind]
     margin = EFFECTS.rider_margin

@@ -217,11 +217,11 @@ class PredictionNet(nn.Module):
         if self.config.hypotheses_by != "effect":
             return logits.softmax(1)
         c = self.config
-        scale, bias = torch.tensor(c.choice_scale), torch.tensor(c.choice_bias)
+        scale, bias = c.choice_scale, c.choice_bias
         if c.choice_scales and rows is not None:
-            kind = rows[:, Col.TYPE].long().cpu()
-            scale, bias = torch.tensor(c.choice_scales)[kind], torch.tensor(c.choice_biases)[kind]
-        side = torch.sigmoid(scale.to(logits.device) * (logits[:, 1] - logits[:, 0]) + bias.to(logits.device))
+            kind = rows[:, Col.TYPE].long().to(logits.device)
+            scale, bias = logits.new_tensor(c.choice_scales)[kind], logits.new_tensor(c.choice_biases)[kind]
+        side = torch.sigmoid(scale * (logits[:, 1] - logits[:, 0]) + bias)
         return torch.stack([1 - side, side], 1)
 
     def step_with_difference(self, latent, memory, image, rows):

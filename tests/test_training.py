@@ -156,6 +156,7 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
     truth = {
         "turn": np.array([any(s.type == "turn" for s in labels[i]) for i in indices]),
         "effect": np.array([any(not s.canonical for s in labels[i]) for i in indices]),
+        "place_effect": np.array([any(s.type == "place" and not s.canonical for s in labels[i]) for i in indices]),
     }
     for what, flagged in truth.items():
         assert flagged.any() and not flagged.all(), what  # the small dataset holds both
@@ -174,6 +175,11 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
     neither = ~(truth["turn"] | truth["effect"])
     assert weights.sum() == pytest.approx(1.0) and weights[neither].sum() == pytest.approx(0.3)
     assert weights[truth["turn"]].sum() >= 0.3 - 1e-9 and weights[truth["effect"]].sum() >= 0.4 - 1e-9
+    # Places with a side effect on top of side effects: a floor within a floor.
+    nested = replace(PRESETS["tiny"], effect_fraction=0.5, place_effect_fraction=0.2)
+    weights = run_sampler([part], nested, seed=0).weights.numpy()
+    assert weights[~truth["effect"]].sum() == pytest.approx(0.3)
+    assert weights[truth["place_effect"]].sum() >= 0.2 - 1e-9
     with pytest.raises(ValueError, match="sum below 1"):
         run_sampler([part], replace(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
 

@@ -86,6 +86,11 @@ class PredictionConfig:
     # the data comes, about 4 in 10 sequences hold one somewhere). With turn_fraction too, each
     # share is a floor (a sequence may hold both) and the rest holds neither.
     effect_fraction: float = 0.0
+    # The share drawn from sequences where a place had a side effect (the block tips, the object
+    # placed falls or slides): a floor beside the two above. Places are the side effects the net
+    # foresees worst, and its head is underconfident where a place at a block's end tips it
+    # every time (benchmarks/place_outcomes.py); one place in six has one, so few runs show it.
+    place_effect_fraction: float = 0.0
     # Weight of the squared error on the pixels where a step had a side effect, as a mean over
     # those pixels (train.sequence_loss); 0: off, and the batches carry no effect masks.
     loss_effect: float = 0.0

@@ -111,16 +111,17 @@ def sequence_loss(
 
 
 def sequence_flags(data: Dataset) -> dict[str, dict[int, bool]]:
-    """Per sequence index, whether it holds a turn and whether it holds a side effect
-    (data/effects.py), read from the shards' small arrays (no images)."""
+    """Per sequence index, whether it holds a turn, a side effect (data/effects.py) and a
+    place with a side effect, read from the shards' small arrays (no images)."""
     turn = TYPES.index("turn")
-    flags: dict[str, dict[int, bool]] = {"turn": {}, "effect": {}}
+    flags: dict[str, dict[int, bool]] = {"turn": {}, "effect": {}, "place_effect": {}}
     for k in range(data.manifest.n_shards):
         z = shard_summary(shard_path(data.root, k))
         labels = summary_effects(z, data.slots)
         for i, steps in zip(z["index"], labels, strict=True):
             flags["turn"][int(i)] = any(s.type == TYPES[turn] for s in steps)
             flags["effect"][int(i)] = any(not s.canonical for s in steps)
+            flags["place_effect"][int(i)] = any(s.type == "place" and not s.canonical for s in steps)
     return flags
 
 
@@ -152,9 +153,13 @@ def share_sampler(flags: dict[str, np.ndarray], shares: dict[str, float], seed: 
 
 def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int):
     """The training runs' sampler over the runs of every part in turn: more turns
-    (`turn_fraction`), more side effects (`effect_fraction`), both, or None (runs as the data
-    comes)."""
-    asked = {"turn": config.turn_fraction, "effect": config.effect_fraction}
+    (`turn_fraction`), more side effects (`effect_fraction`), more places with one
+    (`place_effect_fraction`), any of them together, or None (runs as the data comes)."""
+    asked = {
+        "turn": config.turn_fraction,
+        "effect": config.effect_fraction,
+        "place_effect": config.place_effect_fraction,
+    }
     asked = {what: share for what, share in asked.items() if share}
     if not asked:
         return None

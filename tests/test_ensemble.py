@@ -215,7 +215,7 @@ def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scen
     from afford.shipped import load_learned
 
     nets = load_learned()
-    assert len(nets.members) == 2 and nets.members[0] is nets.predictor
+    assert len(nets.members) == 3 and nets.members[0] is nets.predictor
     task = load_task("tasks/uncertain/02-ball-near-a-tipping-edge.json", scene)
     o = solve(task, "ensemble", scene, PlannerConfig(search=SearchConfig(progress=False)), nets)
     # Members trained apart part at the tipping end, so the risk-averse plan places the ball at

@@ -160,7 +160,7 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
         "place_effect": np.array([placed[i] for i in indices]),
     }
     for what, flagged in truth.items():
-        assert flagged.any() and not flagged.all(), what  # the small dataset holds both
+        assert flagged.any() and not flagged.all(), what  # the small dataset holds each kind
         config = replace(PRESETS["tiny"], **{f"{what}_fraction": 0.7})
         weights = run_sampler([part], config, seed=0).weights.numpy()
         assert weights[flagged].sum() == pytest.approx(0.7) and weights.sum() == pytest.approx(1.0)

@@ -17,7 +17,6 @@ from afford.prediction.config import PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
 from afford.prediction.variance import beta_nll
-from afford.sim.affordances import TYPES
 from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
@@ -110,18 +109,25 @@ def sequence_loss(
     return (err * mask).sum() / mask.sum()
 
 
+# What a training sequence can be drawn for (config `<name>_fraction`): a step that marks it.
+STEP_MARKS = {
+    "turn": lambda step: step.type == "turn",
+    "effect": lambda step: not step.canonical,
+    "place_effect": lambda step: step.type == "place" and not step.canonical,
+}
+
+
 def sequence_flags(data: Dataset) -> dict[str, dict[int, bool]]:
-    """Per sequence index, whether it holds a turn, a side effect (data/effects.py) and a
-    place with a side effect, read from the shards' small arrays (no images)."""
-    turn = TYPES.index("turn")
-    flags: dict[str, dict[int, bool]] = {"turn": {}, "effect": {}, "place_effect": {}}
+    """Per sequence index, whether a step of it is marked by each of STEP_MARKS (a turn, a side
+    effect, a place with a side effect; data/effects.py), read from the shards' small arrays
+    (no images)."""
+    flags: dict[str, dict[int, bool]] = {what: {} for what in STEP_MARKS}
     for k in range(data.manifest.n_shards):
         z = shard_summary(shard_path(data.root, k))
         labels = summary_effects(z, data.slots)
         for i, steps in zip(z["index"], labels, strict=True):
-            flags["turn"][int(i)] = any(s.type == TYPES[turn] for s in steps)
-            flags["effect"][int(i)] = any(not s.canonical for s in steps)
-            flags["place_effect"][int(i)] = any(s.type == "place" and not s.canonical for s in steps)
+            for what, marks in STEP_MARKS.items():
+                flags[what][int(i)] = any(marks(s) for s in steps)
     return flags
 
 
@@ -155,11 +161,7 @@ def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int
     """The training runs' sampler over the runs of every part in turn: more turns
     (`turn_fraction`), more side effects (`effect_fraction`), more places with one
     (`place_effect_fraction`), any of them together, or None (runs as the data comes)."""
-    asked = {
-        "turn": config.turn_fraction,
-        "effect": config.effect_fraction,
-        "place_effect": config.place_effect_fraction,
-    }
+    asked = {what: getattr(config, f"{what}_fraction") for what in STEP_MARKS}
     asked = {what: share for what, share in asked.items() if share}
     if not asked:
         return None

@@ -88,3 +88,26 @@ def test_an_effect_drawn_on_an_object_that_stayed_counts_against_the_still_objec
     assert faithful.still["grasp"].error == pytest.approx(0.0)
     assert imagined.still["all"].error > 0.01 and imagined.still["turn"].executions == 0
     assert faithful.side["all"].executions == 0  # a canonical step has no side group
+
+
+def test_a_side_effect_is_split_into_where_objects_leave_and_where_they_land():
+    from afford.sim.camera import world_to_pixel
+
+    before, _ = images()
+    poses = np.full((2, 7), np.nan)
+    poses[0] = [0.0, 0.25, 0.02, 1, 0, 0, 0]  # grasped
+    poses[1] = [0.1, 0.35, 0.02, 1, 0, 0, 0]  # pushed ...
+    after = poses.copy()
+    after[1, :2] = [-0.1, 0.35]  # ... far across the table
+    truth = before.copy()
+    (c0, r0), (c1, r1) = world_to_pixel(poses[1, :3]).astype(int), world_to_pixel(after[1, :3]).astype(int)
+    truth[r0 - 3 : r0 + 3, c0 - 3 : c0 + 3] = 0.0  # gone from where it stood
+    truth[r1 - 3 : r1 + 3, c1 - 3 : c1 + 3] = 1.0  # there where it ended
+    predicted = before.copy()
+    predicted[r0 - 3 : r0 + 3, c0 - 3 : c0 + 3] = 0.0  # the leaving drawn, the landing not
+    f = Foresight()
+    step = StepEffects("grasp", 0, (Effect("pushed", 1),))
+    f.add(step, np.zeros(7), poses, after, predicted, before, truth)
+    assert f.parts["leaving"].foresight == pytest.approx(1.0)
+    assert f.parts["landing"].foresight == pytest.approx(0.0)
+    assert 0.0 < f.side["all"].foresight < 1.0

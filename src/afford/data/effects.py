@@ -243,15 +243,32 @@ def object_mask(before: np.ndarray, after: np.ndarray, slots: list[int]) -> np.n
     return disks(points)
 
 
-def effect_mask(effects: list[Effect], before: np.ndarray, after: np.ndarray, place_point) -> np.ndarray:
-    """Where side effects show: each affected object before and after, except that a placed
-    object that slid or fell is looked for where it was put and where it ended (before, it was
-    in the gripper, and its leaving the gripper is the canonical part)."""
-    points = []
+def effect_points(
+    effects: list[Effect], before: np.ndarray, after: np.ndarray, place_point
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Where the affected objects were and where they ended, each a list of world points (an
+    object not on the table has none). A placed object that slid or fell is looked for where it
+    was put (before, it was in the gripper, and its leaving the gripper is the canonical part)."""
+    starts, ends = [], []
     for e in effects:
         start = place_point if e.kind in (PLACED_SLIDES, PLACED_FALLS) else before[e.slot, :3]
-        points += [p for p in (start, after[e.slot, :3]) if not np.isnan(p[0])]
-    return disks(points)
+        starts += [] if np.isnan(start[0]) else [start]
+        ends += [] if np.isnan(after[e.slot, 0]) else [after[e.slot, :3]]
+    return starts, ends
+
+
+def effect_mask(effects: list[Effect], before: np.ndarray, after: np.ndarray, place_point) -> np.ndarray:
+    """Where side effects show: disks around each affected object before and after
+    (`effect_points`)."""
+    starts, ends = effect_points(effects, before, after, place_point)
+    return disks(starts + ends)
+
+
+def landing_mask(effects: list[Effect], before: np.ndarray, after: np.ndarray, place_point) -> np.ndarray:
+    """The part of `effect_mask` where affected objects land: their end disks outside every
+    start disk. The rest is where they leave from."""
+    starts, ends = effect_points(effects, before, after, place_point)
+    return disks(ends) & ~disks(starts)
 
 
 def step_mask(step: StepEffects, before: np.ndarray, after: np.ndarray, action: np.ndarray) -> np.ndarray:

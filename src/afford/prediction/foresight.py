@@ -32,6 +32,7 @@ from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
 
 BATCH = 32
+PARTS = ("leaving", "landing")  # a side effect's disks: where objects were, where they ended
 
 
 @dataclass
@@ -90,6 +91,8 @@ class Foresight:
     acted: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
     side: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
     kinds: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in fx.KINDS})
+    # Side effects split by where: the disks objects leave from, and those they land in only.
+    parts: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in PARTS})
     still: dict[str, Tally] = field(default_factory=lambda: {k: Tally() for k in ("all", *TYPES)})
 
     def add(self, step: fx.StepEffects, action, before_poses, after_poses, predicted, before, truth) -> None:
@@ -103,6 +106,9 @@ class Foresight:
             mask = fx.step_mask(step, before_poses, after_poses, action)
             for key in ("all", step.type):
                 self.side[key].add(err, copy, mask)
+            landing = fx.landing_mask(list(step.effects), before_poses, after_poses, place) & mask
+            self.parts["leaving"].add(err, copy, mask & ~landing)
+            self.parts["landing"].add(err, copy, landing)
             for kind in step.kinds:
                 of_kind = [e for e in step.effects if e.kind == kind]
                 self.kinds[kind].add(err, copy, effect_mask(of_kind, before_poses, after_poses, place))
@@ -121,6 +127,7 @@ class Foresight:
             "acted": {k: t.as_dict() for k, t in self.acted.items()},
             "side": {k: t.as_dict() for k, t in self.side.items()},
             "kinds": {k: t.as_dict() for k, t in self.kinds.items()},
+            "parts": {k: t.as_dict() for k, t in self.parts.items()},
             "still": {k: t.as_dict() for k, t in self.still.items()},
         }
 
@@ -164,6 +171,9 @@ def format_foresight(result: dict) -> str:
         name = "acted-on object" if who == "acted" else "side effects"
         lines.append(f"{name:24s} " + " ".join(f"{cell(result[who][g]):>12s}" for g in groups))
     lines.append("by kind: " + ", ".join(f"{k} {cell(t)}" for k, t in result["kinds"].items()))
+    if "parts" in result:  # absent in results written before it was measured
+        parts = ", ".join(f"{k} {cell(t)}" for k, t in result["parts"].items())
+        lines.append(f"side effects, where: {parts}")
     if "still" in result:  # absent in results written before it was measured
 
         def error(t: dict) -> str:

@@ -272,3 +272,35 @@ def test_the_effect_loss_counts_only_the_effect_pixels():
         on_patch = float(((predicted - images[:, 1:]) ** 2).sum(2)[:, :, 40:60, 40:60].mean())
         with_effects = float(sequence_loss(net, images, actions, steps, some))
     assert on_patch > 0 and with_effects == pytest.approx(base + on_patch, rel=1e-4)
+
+
+def test_the_coarse_error_forgives_an_object_drawn_a_little_off_but_not_one_missing():
+    from afford.prediction.train import coarse_error
+
+    truth = torch.zeros(1, 4, 32, 32)
+    truth[..., 9:13, 9:13] = 1.0  # an object inside the 8x8 block at (8, 8)
+    nearby = torch.zeros_like(truth)
+    nearby[..., 11:15, 11:15] = 1.0  # drawn two pixels off, inside the same block
+    missing = torch.zeros_like(truth)
+    assert float(coarse_error(nearby - truth, 8)) == pytest.approx(0.0, abs=1e-7)
+    assert float(coarse_error(missing - truth, 8)) == pytest.approx(4 * 16 / 64 / 16)  # 1 block of 16
+    assert (nearby - truth).abs().sum() > (missing - truth).abs().sum()  # pixel-wise, the other way round
+    two = coarse_error(torch.stack([missing - truth, nearby - truth], 1), 8)  # (B, L) of steps
+    assert two.shape == (1, 2) and float(two[0, 0]) > 0 and float(two[0, 1]) == pytest.approx(0.0, abs=1e-7)
+
+
+def test_the_coarse_loss_is_part_of_the_training_loss():
+    from afford.prediction.config import PRESETS
+    from afford.prediction.model import PredictionNet
+    from afford.prediction.train import coarse_error, sequence_loss
+
+    torch.manual_seed(0)
+    net = PredictionNet(PRESETS["tiny"])
+    coarse = PredictionNet(replace(PRESETS["tiny"], loss_coarse=2.0))
+    coarse.load_state_dict(net.state_dict())
+    images, actions, steps = torch.rand(2, 2, 4, 128, 128), torch.zeros(2, 1, 7), torch.tensor([1, 1])
+    with torch.no_grad():
+        base = float(sequence_loss(net, images, actions, steps))
+        term = float(coarse_error(net.rollout(images[:, 0], actions, steps) - images[:, 1:], 8).mean())
+        with_coarse = float(sequence_loss(coarse, images, actions, steps))
+    assert term > 0 and with_coarse == pytest.approx(base + 2.0 * term, rel=1e-4)

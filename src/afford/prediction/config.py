@@ -94,6 +94,14 @@ class PredictionConfig:
     # Weight of the squared error on the pixels where a step had a side effect, as a mean over
     # those pixels (train.sequence_loss); 0: off, and the batches carry no effect masks.
     loss_effect: float = 0.0
+    # Weight of the absolute error between prediction and truth each averaged over blocks of
+    # coarse_px x coarse_px pixels (train.coarse_error; 0: off). Pixel losses charge an object
+    # drawn a few pixels from where it lands twice (drawn where it is not, missing where it is)
+    # and one not drawn at all once, so a net unsure of a landing to within the object's size
+    # draws none (foresight of the landing disks: 0.00, `afford eval prediction`'s parts). Over
+    # blocks, an object drawn within its block costs nothing and one missing costs as before.
+    loss_coarse: float = 0.0
+    coarse_px: int = 8  # the latent grid's cell at 128 px
     # Where that squared error is taken (data/torch_data.REGIONS): "effects", the pixels of
     # the side effects that happened (weighs only one way: the net learns to draw effects where
     # none follow); "objects", every object's pixels in every step, effect or not.

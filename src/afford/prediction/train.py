@@ -39,6 +39,15 @@ def change_mask(images: torch.Tensor, predicted: torch.Tensor, repair: bool) -> 
     return ((images[:, 1:] - inputs).abs().amax(2, keepdim=True) > CHANGED).float()
 
 
+def coarse_error(diff: torch.Tensor, px: int) -> torch.Tensor:
+    """The absolute error of (..., C, H, W) differences averaged over px x px blocks first:
+    summed over channels, mean over blocks (...). Where an object is drawn inside the block it
+    lands in, its pixels cancel; where it is missing, they count in full."""
+    lead = diff.shape[:-3]
+    pooled = nn.functional.avg_pool2d(diff.flatten(0, -4), px)
+    return pooled.abs().sum(1).mean((-2, -1)).view(lead)
+
+
 def sequence_loss(
     net: nn.Module,
     images: torch.Tensor,
@@ -66,6 +75,9 @@ def sequence_loss(
     over the image it weighs nothing, and the squared error (the mean outcome) rather than the
     absolute error (the median) keeps an effect that follows in fewer than half of similar
     cases from being drawn as not happening.
+
+    With `config.loss_coarse`, the absolute error over blocks (`coarse_error`) is added: it
+    charges a missing object, not one drawn a few pixels off.
 
     `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
@@ -98,6 +110,8 @@ def sequence_loss(
         on = effects.float()
         squared = (diff**2).sum(2) * on
         err = err + c.loss_effect * squared.sum((-2, -1)) / on.sum((-2, -1)).clamp_min(1.0)
+    if c.loss_coarse:
+        err = err + c.loss_coarse * coarse_error(diff, c.coarse_px)
     if many:  # the terms above are the winner's (winner-takes-all); every candidate learns a little
         others = (candidates.float() - truth[:, :, None]).abs().sum(3).mean((-2, -1))  # (B, L, K)
         err = err + c.loss_others * others.mean(-1)

@@ -181,6 +181,14 @@ def test_training_only_the_other_outcomes_keeps_the_first_exactly():
         make_optimizer(PredictionNet(replace(TINY, trained="outcomes")), replace(TINY, trained="outcomes"))
 
 
+def test_training_only_the_side_effect_outcome_keeps_the_head_and_the_first_outcome():
+    torch.manual_seed(0)
+    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="side")
+    net = PredictionNet(config)
+    moved = _moved_by_training(net, config)
+    assert moved and all(".forks." in k for k in moved)
+
+
 def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
     """choice_head=grid: a two-outcome checkpoint with the pooled head loads with the new head
     as initialised (uniform) and every outcome as it was; trained=head moves the head alone."""

@@ -192,6 +192,9 @@ TRAINED = {
     "all": lambda name: True,
     "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice"),
     "head": lambda name: name.startswith("decoder.choice"),
+    # The side-effect outcome's own layers (fork=latent): the canonical outcome and the head stay
+    # as they were, so what the net draws and picks elsewhere cannot change.
+    "side": lambda name: ".forks." in name,
     "variance": lambda name: name.startswith("decoder.variance"),
 }
 

@@ -148,9 +148,9 @@ class PredictionConfig:
     # parts (fork=latent's P^a ends, the choice head), so that fine-tuning a one-outcome net into
     # two keeps its first outcome exactly: what it foresaw, and the plans it found, stay;
     # "head", only the choice head (a new head on a net whose outcomes are kept); "side", only
-    # the other outcomes' P^a ends (the first outcome and the head kept: the side-effect outcome
-    # redrawn, nothing else); "variance", only the variance head (a net that learns where it is
-    # unsure, its images unchanged).
+    # the other outcomes' P^a ends (the first outcome and the head's weights kept: the
+    # side-effect outcome redrawn); "variance", only the variance head (a net that learns where
+    # it is unsure, its images unchanged).
     trained: str = "all"
     # A per-pixel variance beside D's image (spatial only; prediction/variance.py, paper V):
     # D's last features also give log sigma^2 of each pixel of the state it predicts, trained by

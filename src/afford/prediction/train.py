@@ -192,8 +192,8 @@ TRAINED = {
     "all": lambda name: True,
     "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice"),
     "head": lambda name: name.startswith("decoder.choice"),
-    # The side-effect outcome's own layers (fork=latent): the canonical outcome and the head stay
-    # as they were, so what the net draws and picks elsewhere cannot change.
+    # The side-effect outcome's own layers (fork=latent): the canonical outcome and the head's
+    # weights stay as they were (its scores still move: the head reads each outcome's dc).
     "side": lambda name: ".forks." in name,
     "variance": lambda name: name.startswith("decoder.variance"),
 }

@@ -51,12 +51,9 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
-    from afford.data.format import DataError, Dataset
+    from afford.data.format import Dataset
 
-    try:
-        data = Dataset(args.data)
-    except DataError as e:
-        raise SystemExit(f"error: {e}") from None
+    data = Dataset(args.data)
     sums = landing_shares(data, args.split, args.limit)
     summary = {
         key: {"ceiling": round(1 - land / total, 4), "executions": n}
@@ -72,4 +69,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from afford.errors import exit_on_user_error
+
+    exit_on_user_error(main)

@@ -148,12 +148,9 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
-    from afford.data.format import DataError, Dataset
+    from afford.data.format import Dataset
 
-    try:
-        data = Dataset(args.data)
-    except DataError as e:
-        raise SystemExit(f"error: {e}") from None
+    data = Dataset(args.data)
     summary = summarise(measure(data, args.split, args.limit, args.runs, args.jitter))
     settings = {"split": args.split, "limit": args.limit, "runs": args.runs, "jitter_m": args.jitter}
     summary["settings"] = settings
@@ -174,4 +171,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from afford.errors import exit_on_user_error
+
+    exit_on_user_error(main)

@@ -7,3 +7,15 @@ other exception through as the bug it is. Each is still a ValueError, as it alwa
 
 class UserError(ValueError):
     """A mistake in what the user gave (a file, an option, a dataset); the message names it."""
+
+
+def exit_on_user_error(main) -> None:
+    """Run a script's `main()`; a UserError ends it with one line (`error: ...`, status 2)
+    instead of a traceback, as the CLI does. For the scripts in benchmarks/."""
+    import sys
+
+    try:
+        main()
+    except UserError as e:
+        print(f"error: {e}", file=sys.stderr)
+        raise SystemExit(2) from None

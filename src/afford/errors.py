@@ -4,12 +4,14 @@ The CLI prints any of them as one line (`afford: error: ...`, exit status 2) and
 other exception through as the bug it is. Each is still a ValueError, as it always was.
 """
 
+from collections.abc import Callable
+
 
 class UserError(ValueError):
     """A mistake in what the user gave (a file, an option, a dataset); the message names it."""
 
 
-def exit_on_user_error(main) -> None:
+def exit_on_user_error(main: Callable[[], object]) -> None:
     """Run a script's `main()`; a UserError ends it with one line (`error: ...`, status 2)
     instead of a traceback, as the CLI does. For the scripts in benchmarks/."""
     import sys

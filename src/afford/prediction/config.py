@@ -98,8 +98,9 @@ class PredictionConfig:
     # coarse_px x coarse_px pixels (train.coarse_error; 0: off). Pixel losses charge an object
     # drawn a few pixels from where it lands twice (drawn where it is not, missing where it is)
     # and one not drawn at all once, so a net unsure of a landing to within the object's size
-    # draws none (foresight of the landing disks: 0.00, `afford eval prediction`'s parts). Over
-    # blocks, an object drawn within its block costs nothing and one missing costs as before.
+    # draws none (foresight of the landing disks: 0.01 on the shipped net, `afford eval
+    # prediction`'s parts). Over blocks, an object drawn within its block costs nothing and one
+    # missing costs as before.
     loss_coarse: float = 0.0
     coarse_px: int = 8  # the latent grid's cell at 128 px
     # Where that squared error is taken (data/torch_data.REGIONS): "effects", the pixels of

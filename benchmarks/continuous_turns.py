@@ -134,4 +134,6 @@ def _sweep(model, scene, task, plan):
 
 
 if __name__ == "__main__":
-    main()
+    from afford.errors import exit_on_user_error
+
+    exit_on_user_error(main)

@@ -33,7 +33,7 @@ def landing_shares(data, split: str, limit: int | None) -> dict[str, tuple[float
             before, after, action = seq.poses[t], seq.poses[t + 1], seq.actions[t]
             place = np.asarray(action[Col.POSITION], dtype=float)
             mask = fx.step_mask(step, before, after, action)
-            landing = fx.landing_mask(list(step.effects), before, after, place) & mask
+            landing = fx.landing_mask(list(step.effects), before, after, place)  # inside mask
             copy = pixel_errors(seq.image(t), seq.image(t + 1))
             for key in ("all", step.type, *step.kinds):
                 total = sums.setdefault(key, [0.0, 0.0, 0])

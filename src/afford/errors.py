@@ -4,6 +4,7 @@ The CLI prints any of them as one line (`afford: error: ...`, exit status 2) and
 other exception through as the bug it is. Each is still a ValueError, as it always was.
 """
 
+import sys
 from collections.abc import Callable
 
 
@@ -14,8 +15,6 @@ class UserError(ValueError):
 def exit_on_user_error(main: Callable[[], object]) -> None:
     """Run a script's `main()`; a UserError ends it with one line (`error: ...`, status 2)
     instead of a traceback, as the CLI does. For the scripts in benchmarks/."""
-    import sys
-
     try:
         main()
     except UserError as e:

@@ -106,7 +106,7 @@ class Foresight:
             mask = fx.step_mask(step, before_poses, after_poses, action)
             for key in ("all", step.type):
                 self.side[key].add(err, copy, mask)
-            landing = fx.landing_mask(list(step.effects), before_poses, after_poses, place) & mask
+            landing = fx.landing_mask(list(step.effects), before_poses, after_poses, place)
             self.parts["leaving"].add(err, copy, mask & ~landing)
             self.parts["landing"].add(err, copy, landing)
             for kind in step.kinds:

@@ -207,3 +207,25 @@ def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
     moved = _moved_by_training(net, config)
     assert moved and all(k.startswith("decoder.choice") for k in moved)
     assert any(k.startswith("decoder.choice_grid") for k in moved)
+
+
+def test_deeper_forks_load_a_shallow_two_outcome_net_and_draw_the_same_at_first():
+    """fork_blocks=2: a two-outcome checkpoint with one forked block loads, both outcomes
+    predict exactly as before (the new block a copy of the trunk's), and trained=side moves
+    the new block with the rest of the fork, never the trunk."""
+    torch.manual_seed(0)
+    shallow = replace(TINY, p_blocks=2, hypotheses=2, hypotheses_by="effect", fork="latent")
+    old = PredictionNet(shallow)
+    tensors = {f"model.{k}": v for k, v in old.state_dict().items()}
+    deep = replace(shallow, fork_blocks=2, trained="side")
+    net = PredictionNet(deep)
+    load_model_state(net, tensors, "shallow.safetensors")
+    images, rows = two_outcomes(2), place_rows(2)
+    with torch.no_grad():
+        a = old.rollout_hypotheses(images[:, 0], rows)[2]
+        b = net.rollout_hypotheses(images[:, 0], rows)[2]
+    assert torch.allclose(a, b, atol=1e-6)
+    moved = _moved_by_training(net, deep)
+    assert any(".forks.0.before.0." in k for k in moved) and all(".forks." in k for k in moved)
+    with pytest.raises(ValueError, match="fork_blocks"):
+        PredictionNet(replace(shallow, fork_blocks=3))

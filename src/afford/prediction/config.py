@@ -124,6 +124,10 @@ class PredictionConfig:
     # layer are repeated per candidate, so each outcome has its own dc and D decodes each: the
     # latent itself forks, and the candidate carried on gives eq. (2) its dc.
     fork: str = "decoder"
+    # With fork="latent", how many of P^a's last blocks each other outcome has of its own (1:
+    # the last block only). More gives the side-effect outcome room to draw where objects land
+    # without moving the canonical outcome's layers (trained="side" keeps those fixed).
+    fork_blocks: int = 1
     # With hypotheses_by=effect, in use: the side-effect outcome is carried on where the head
     # gives it more than this probability (0.5: the likelier). A cut-off tuned on val, as the
     # recognition net's is: a second outcome drawn where none follows costs canonical plans.

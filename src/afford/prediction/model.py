@@ -295,6 +295,9 @@ class PredictionNet(nn.Module):
         if k == 1:
             return state
         if "decoder.choice.weight" in state:  # already K outcomes: a head of another design starts anew
+            for name in own:  # forks made deeper (fork_blocks): the new blocks as the trunk's, exactly
+                if ".forks." in name and name not in state and self._fork_source(name) in state:
+                    state[name] = state[self._fork_source(name)].clone()
             head = [n for n in set(own) | set(state) if n.startswith("decoder.choice")]
             if any(n not in state or n not in own or state[n].shape != own[n].shape for n in head):
                 state = {n: v for n, v in state.items() if not n.startswith("decoder.choice")}
@@ -307,22 +310,27 @@ class PredictionNet(nn.Module):
         for name in ("decoder.out.weight", "decoder.out.bias"):
             if name in state and state[name].shape[0] * k == own[name].shape[0]:
                 state[name] = torch.cat([state[name]] + [near(state[name]) for _ in range(k - 1)], 0)
-        # Forked in the latent: each fork starts as a copy of its P^a's last block and output layer.
-        last = f"blocks.{self.config.p_blocks - 1}."
+        # Forked in the latent: each fork starts as a copy of its P^a's last blocks and output layer.
         for name in own:
-            head, sep, tail = name.partition(".forks.")
-            if not sep:
-                continue
-            part = tail.split(".", 1)[1]  # "block.conv1.weight" or "out.bias"
-            source = (
-                f"{head}.{last}{part[len('block.') :]}" if part.startswith("block.") else f"{head}.{part}"
-            )
-            if source in state:
-                state[name] = near(state[source])
+            if ".forks." in name and self._fork_source(name) in state:
+                state[name] = near(state[self._fork_source(name)])
         for name in own:
             if name.startswith("decoder.choice"):
                 state[name] = own[name]
         return state
+
+    def _fork_source(self, name: str) -> str:
+        """The trunk's parameter a fork's parameter copies: its `before` blocks and `block` the
+        P^a's last `fork_blocks` blocks in order, its `out` the P^a's output layer."""
+        head, _, tail = name.partition(".forks.")
+        part = tail.split(".", 1)[1]  # "block.conv1.weight", "before.0.conv1.weight" or "out.bias"
+        first = self.config.p_blocks - self.config.fork_blocks
+        if part.startswith("block."):
+            return f"{head}.blocks.{self.config.p_blocks - 1}.{part[len('block.') :]}"
+        if part.startswith("before."):
+            i, rest = part[len("before.") :].split(".", 1)
+            return f"{head}.blocks.{first + int(i)}.{rest}"
+        return f"{head}.{part}"
 
     def step(self, latent, memory, image, rows):
         """One prediction: (c_i, m_i, s_i, a_i) -> (c_{i+1}, m_{i+1}, s_{i+1}).

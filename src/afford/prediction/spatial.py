@@ -148,13 +148,24 @@ def _out_conv(c: PredictionConfig) -> nn.Conv2d:
 
 
 class Fork(nn.Module):
-    """Another outcome's own end of P^a (`fork="latent"`): a copy of its last block and its
-    output layer, so each candidate outcome has its own dc, and the latent itself forks."""
+    """Another outcome's own end of P^a (`fork="latent"`): copies of its last `fork_blocks`
+    blocks (`before`, then `block`) and its output layer, so each candidate outcome has its own
+    dc, and the latent itself forks."""
 
     def __init__(self, c: PredictionConfig, act: type[nn.Module]):
         super().__init__()
+        self.before = nn.ModuleList(Block(c.p_channels, act) for _ in range(c.fork_blocks - 1))
         self.block = Block(c.p_channels, act)
         self.out = _out_conv(c)
+
+    def ends(self) -> list[nn.Module]:
+        return [*self.before, self.block]
+
+
+def _through(blocks: list[nn.Module], h: torch.Tensor, blob: torch.Tensor) -> torch.Tensor:
+    for block in blocks:
+        h = block(h, blob)
+    return h
 
 
 class SpatialP(nn.Module):
@@ -162,7 +173,7 @@ class SpatialP(nn.Module):
 
     With `fork="latent"` and K hypotheses, dc (B, K, ...) and m_{i+1} (B, K, ...): the first
     outcome through `blocks` and `out` as with one, the others through their `forks`, which
-    branch before the last block.
+    branch before the last `fork_blocks` blocks.
     """
 
     def __init__(self, c: PredictionConfig):
@@ -176,20 +187,21 @@ class SpatialP(nn.Module):
         self.act = act()
         self.out = _out_conv(c)
         forked = c.hypotheses if c.fork == "latent" else 1
-        if forked > 1 and c.p_blocks < 1:
-            raise ValueError("fork=latent branches before P's last block: p_blocks must be at least 1")
+        if forked > 1 and not 1 <= c.fork_blocks <= c.p_blocks:
+            raise ValueError("fork=latent forks P's last fork_blocks blocks: 1 <= fork_blocks <= p_blocks")
         self.forks = nn.ModuleList(Fork(c, act) for _ in range(forked - 1))
+        self.shared = c.p_blocks - (c.fork_blocks if self.forks else 0)
 
     def forward(self, latent: torch.Tensor, memory: torch.Tensor, vector: torch.Tensor, pixel: torch.Tensor):
         maps = action_maps(vector, pixel, self.size, self.sigma)
         blob = maps[:, :1]
         h = self.inp(torch.cat([latent, memory, maps], 1))
-        for block in self.blocks[:-1] if self.forks else self.blocks:
+        for block in self.blocks[: self.shared]:
             h = block(h, blob)
         if not self.forks:
             return self._split(self.out(self.act(h)))
-        ends = [(self.blocks[-1], self.out)] + [(f.block, f.out) for f in self.forks]
-        outs = [self._split(out(self.act(block(h, blob)))) for block, out in ends]
+        ends = [(list(self.blocks[self.shared :]), self.out)] + [(f.ends(), f.out) for f in self.forks]
+        outs = [self._split(out(self.act(_through(blocks, h, blob)))) for blocks, out in ends]
         return torch.stack([o[0] for o in outs], 1), torch.stack([o[1] for o in outs], 1)
 
     def _split(self, out: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

@@ -168,7 +168,7 @@ def cmd_export(args) -> int:
 
     rec_run, pred_run = Path(args.recognition), Path(args.prediction)
     members = [Path(m) for m in args.member or ()]
-    for run in (rec_run, pred_run, *members):
+    for run in (rec_run, pred_run, *members, *([args.side] if args.side else [])):
         _check_run(str(run))
     threshold = read_threshold(rec_run)
     extra = {} if threshold is None else {"threshold": threshold, "tuned_on": "val"}
@@ -187,6 +187,12 @@ def cmd_export(args) -> int:
         sizes[name] = export_weights(
             run / args.checkpoint, out / name, "prediction", config=read_calibration(run)
         )
+    if args.side:  # the side-effect outcome's net beside the prediction net: they load as a pair
+        from afford.prediction.evaluate import load_net
+        from afford.prediction.paired import SIDE_FILE
+
+        sizes[SIDE_FILE] = export_weights(Path(args.side) / args.checkpoint, out / SIDE_FILE, "prediction")
+        load_net(out / PREDICTION_FILE)  # a pair that cannot be made says why now, not when planning
     for name, size in sizes.items():
         print(f"{out / name}: {size / 2**20:.1f} MiB")
     return 0
@@ -337,6 +343,12 @@ def add_parsers(sub) -> None:
         metavar="RUN",
         help="a prediction run to ship as a member of the ensemble planner's ensemble (beside --prediction); "
         "repeat for more",
+    )
+    x.add_argument(
+        "--side",
+        metavar="RUN",
+        help="a prediction run trained with the side-effect term (loss_effect): the planner draws its "
+        "side-effect outcome and --prediction's canonical outcome, with --prediction's head (a pair)",
     )
     x.add_argument("--checkpoint", default=BEST, help=f"file in each RUN (default {BEST})")
     x.add_argument("--out", required=True, metavar="DIR")

@@ -23,8 +23,9 @@ from afford.images import to_chw, to_hwc
 from afford.prediction import foresight
 from afford.prediction.config import CHANGED, PredictionConfig
 from afford.prediction.model import PredictionNet
+from afford.prediction.paired import PairedNet, side_file
 from afford.sim.affordances import TYPES
-from afford.training.checkpoint import load_net_from_checkpoint
+from afford.training.checkpoint import CheckpointError, load_net_from_checkpoint
 
 KIND = "prediction"
 TRAIN_SEQUENCES = 500
@@ -36,8 +37,16 @@ METRICS = {"all_area": None, "changed_area": CHANGED, "changed_area_any": 0.0}
 SPLIT_METRICS = ("changed_area_canonical", "changed_area_side")
 
 
-def load_net(path: str | Path) -> tuple[PredictionNet, PredictionConfig]:
+def load_net(path: str | Path) -> tuple[PredictionNet | PairedNet, PredictionConfig]:
+    """The prediction net in a checkpoint, and its config; a pair (paired.py) where a
+    side-effect net lies beside it (the pair's config: the main net's)."""
     net, config, _ = load_net_from_checkpoint(path, KIND, PredictionConfig, PredictionNet)
+    if side_file(path).is_file():
+        side, _, _ = load_net_from_checkpoint(side_file(path), KIND, PredictionConfig, PredictionNet)
+        try:
+            net = PairedNet(net, side).eval()
+        except ValueError as e:
+            raise CheckpointError(f"{side_file(path)}: {e}") from None
     return net, config
 
 

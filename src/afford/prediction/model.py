@@ -10,7 +10,7 @@ predicted one after.
 Two architectures fill in E, P^a and D (`config.architecture`): "dense", the paper's vector
 latent (`dense.py`, the `paper` preset), and "spatial", a latent grid that learns on a CPU
 (`spatial.py`, the `cpu` preset). This module holds what they share: routing by type, the
-action vector, eq. (2) and (3), and the rollout.
+action vector, eq. (2) and (3); the rollout over a sequence of actions is rollout.py's.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from torch import nn
 from afford.prediction.config import CHANGED, PredictionConfig
 from afford.prediction.dense import DenseDecoder, DenseEncoder, DenseP
 from afford.prediction.layers import apply_difference, clamped_tanh, normalise_latent
+from afford.prediction.rollout import Rollouts
 from afford.prediction.spatial import SpatialDecoder, SpatialEncoder, SpatialP
 from afford.sim.affordance import Col
 from afford.sim.camera import world_to_pixel
@@ -91,7 +92,7 @@ def winners(candidates: torch.Tensor, differences: torch.Tensor, image: torch.Te
 FORKS = ("decoder", "latent")
 
 
-class PredictionNet(nn.Module):
+class PredictionNet(Rollouts, nn.Module):
     def __init__(self, config: PredictionConfig):
         super().__init__()
         if config.architecture not in ARCHITECTURES:
@@ -196,18 +197,18 @@ class PredictionNet(nn.Module):
                 None if log_var is None else log_var[:, None],
             )
         dc, memory_out, candidates, _, logits, log_var = self._candidates(latent, memory, image, rows)
+        next_latent, memory_out = self.outcome_states(latent, dc, memory_out)
+        return Outcomes(next_latent, memory_out, candidates, self.probabilities(logits, rows), log_var)
+
+    def outcome_states(self, latent, dc, memory_out) -> tuple[torch.Tensor, torch.Tensor]:
+        """K > 1: every candidate's next latent and memory trace (B, K, ...) from `_candidates`'
+        dc and memory (one for all candidates unless forked in the latent)."""
         k = self.config.hypotheses
         if self.config.fork != "latent":  # one dc and memory for every candidate
             dc = dc[:, None].expand(-1, k, *dc.shape[1:])
             memory_out = memory_out[:, None].expand(-1, k, *memory_out.shape[1:])
         next_latent = self.encoder.renormalise((latent[:, None] + dc).flatten(0, 1))  # eq. (2)
-        return Outcomes(
-            next_latent.view(*dc.shape[:2], *next_latent.shape[1:]),
-            memory_out,
-            candidates,
-            self.probabilities(logits, rows),
-            log_var,
-        )
+        return next_latent.view(*dc.shape[:2], *next_latent.shape[1:]), memory_out
 
     def probabilities(self, logits: torch.Tensor, rows: torch.Tensor | None = None) -> torch.Tensor:
         """(B, K) how likely each outcome is, from the choice head's logits: by effect, the
@@ -223,11 +224,6 @@ class PredictionNet(nn.Module):
             scale, bias = logits.new_tensor(c.choice_scales)[kind], logits.new_tensor(c.choice_biases)[kind]
         side = torch.sigmoid(scale * (logits[:, 1] - logits[:, 0]) + bias)
         return torch.stack([1 - side, side], 1)
-
-    def step_with_difference(self, latent, memory, image, rows):
-        """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
-        new values and, last, its mask."""
-        return self.step_hypotheses(latent, memory, image, rows)[:4]
 
     def step_hypotheses(
         self,
@@ -331,101 +327,3 @@ class PredictionNet(nn.Module):
             i, rest = part[len("before.") :].split(".", 1)
             return f"{head}.blocks.{first + int(i)}.{rest}"
         return f"{head}.{part}"
-
-    def step(self, latent, memory, image, rows):
-        """One prediction: (c_i, m_i, s_i, a_i) -> (c_{i+1}, m_{i+1}, s_{i+1}).
-
-        Each example goes through the P module of its own affordance type.
-        """
-        return self.step_with_difference(latent, memory, image, rows)[:3]
-
-    def rollout_with_differences(
-        self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
-    ) -> tuple[torch.Tensor, torch.Tensor]:
-        """Predicted states (B, L, C, H, W) and D's differences (B, L, C+1, H, W) after each of
-        L actions.
-
-        With `steps` (B,), run k stops after steps[k] actions (its later outputs are zeros):
-        padded steps of a batch cost nothing.
-        """
-        return self.rollout_hypotheses(image, actions, steps)[:2]
-
-    def rollout_hypotheses(
-        self,
-        image: torch.Tensor,
-        actions: torch.Tensor,
-        steps: torch.Tensor | None = None,
-        truth: torch.Tensor | None = None,
-        labels: torch.Tensor | None = None,
-    ) -> tuple:
-        """`rollout_with_differences`, and with K > 1 hypotheses also every step's candidates
-        (B, L, K, C, H, W), logits (B, L, K) and picks (B, L) (else None, None, None), and with
-        a variance head the log sigma^2 of each state (B, L, 1, H, W) (else None); with `truth`
-        (B, L, C, H, W) each step carries on its winner, with `labels` (B, L) the candidate they
-        name (`step_hypotheses`)."""
-        b, length = actions.shape[:2]
-        at = image.device
-        order = (
-            torch.arange(b, device=at)
-            if steps is None
-            else torch.argsort(steps, descending=True, stable=True)
-        )
-        active = (
-            torch.full((length,), b, device=at)
-            if steps is None
-            else (steps[order][None, :] > torch.arange(length, device=at)[:, None]).sum(1)
-        )
-        image = image[order]
-        acts = actions[order]
-        truth = None if truth is None else truth[order]
-        labels = None if labels is None else labels[order]
-        latent, memory = self.encode(image)
-        states = differences = candidates = logits = picks = log_vars = None
-        for i in range(length):
-            n = int(active[i])
-            if n == 0:
-                break
-            latent, memory, image, difference, hyp, log_var = self.step_hypotheses(
-                latent[:n],
-                memory[:n],
-                image[:n],
-                acts[:n, i],
-                None if truth is None else truth[:n, i],
-                None if labels is None else labels[:n, i],
-            )
-            if states is None:  # made here: under autocast the outputs may be bfloat16
-                states = image.new_zeros((b, length, *image.shape[1:]))
-                differences = difference.new_zeros((b, length, *difference.shape[1:]))
-                if hyp is not None:
-                    candidates = hyp.candidates.new_zeros((b, length, *hyp.candidates.shape[1:]))
-                    logits = hyp.logits.new_zeros((b, length, hyp.logits.shape[1]))
-                    picks = hyp.picked.new_zeros((b, length))
-                if log_var is not None:
-                    log_vars = log_var.new_zeros((b, length, *log_var.shape[1:]))
-            states[order[:n], i] = image
-            differences[order[:n], i] = difference
-            if hyp is not None:
-                candidates[order[:n], i] = hyp.candidates
-                logits[order[:n], i] = hyp.logits
-                picks[order[:n], i] = hyp.picked
-            if log_var is not None:
-                log_vars[order[:n], i] = log_var
-        return states, differences, candidates, logits, picks, log_vars
-
-    def forward(
-        self,
-        image: torch.Tensor,
-        actions: torch.Tensor,
-        steps: torch.Tensor | None = None,
-        truth: torch.Tensor | None = None,
-        labels: torch.Tensor | None = None,
-    ) -> tuple:
-        """Training's forward pass, `rollout_hypotheses`: a call through the module, so that
-        DistributedDataParallel sees it."""
-        return self.rollout_hypotheses(image, actions, steps, truth, labels)
-
-    def rollout(
-        self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None
-    ) -> torch.Tensor:
-        """Predicted states (B, L, C, H, W) after each of L actions (B, L, 7) from images (B, C, H, W)."""
-        return self.rollout_with_differences(image, actions, steps)[0]

@@ -109,3 +109,23 @@ def test_export_ships_a_pair_that_plans(tmp_path, capsys):
     # A side-effect net with one outcome cannot pair: one line at export, not at planning.
     assert main([*export, "--side", str(runs / "one"), "--out", str(tmp_path / "bad")]) == 2
     assert "hypotheses_by=effect" in capsys.readouterr().err
+
+
+def test_a_pair_is_an_ensemble_member_beside_single_nets():
+    from afford.planning.tree import Node
+    from afford.planning.uncertain import EnsembleModel
+    from afford.recognition.config import PRESETS as REC
+    from afford.recognition.infer import Recognizer
+    from afford.recognition.model import RecognitionNet
+
+    pair, single = PairedNet(_net(0), _net(1)), _net(2)
+    images, rows = _inputs(1)
+    recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"])
+    model = EnsembleModel(images[0].permute(1, 2, 0).numpy(), recognizer, (pair, single), 1.0)
+    start, state = model.root()
+    ((_, child),) = model.predict([Node((), start, state)], [TURN])
+    assert child.images.shape == (2, 128, 128, 4)
+    assert child.latent[0].shape[0] == 2 * child.latent[1].shape[0]  # the pair's two latents side by side
+    with torch.no_grad():
+        alone = single.step(state.latent[1][None], state.memory[1][None], images, rows[:, 0])[2]
+    assert np.allclose(child.images[1], alone[0].permute(1, 2, 0).numpy(), atol=1e-6)

@@ -54,10 +54,11 @@ class EnsembleError(UserError):
 
 @dataclass
 class EnsembleState:
-    """Each member's own state, stacked on a first axis of K."""
+    """Each member's own state: its latent and memory trace (a tuple of K: members' latents may
+    differ in width, a pair's being two nets'), and the images stacked on a first axis of K."""
 
-    latent: torch.Tensor
-    memory: torch.Tensor
+    latent: tuple[torch.Tensor, ...]
+    memory: tuple[torch.Tensor, ...]
     images: np.ndarray  # (K, H, W, C): each member's predicted image
     variances: np.ndarray | None = None  # (K, H, W): each member's variance head (None: none has)
 
@@ -116,8 +117,8 @@ class EnsembleModel(WorldModel):
     def root(self):
         x = to_chw(self.image[None])
         states = [m.encode(x) for m in self.members]
-        latent = torch.stack([s[0][0] for s in states])
-        memory = torch.stack([s[1][0] for s in states])
+        latent = tuple(s[0][0] for s in states)
+        memory = tuple(s[1][0] for s in states)
         images = np.repeat(self.image[None], len(self.members), axis=0)
         return self.image, EnsembleState(latent, memory, images)
 
@@ -147,8 +148,8 @@ class EnsembleModel(WorldModel):
             (
                 images[:, j].mean(axis=0),
                 EnsembleState(
-                    torch.stack([t[j] for t in out_latent]),
-                    torch.stack([t[j] for t in out_memory]),
+                    tuple(t[j] for t in out_latent),
+                    tuple(t[j] for t in out_memory),
                     images[:, j],
                     None if variances is None else variances[:, j],
                 ),

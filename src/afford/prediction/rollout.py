@@ -100,17 +100,9 @@ class Rollouts:
                 log_vars[order[:n], i] = log_var
         return states, differences, candidates, logits, picks, log_vars
 
-    def forward(
-        self,
-        image: torch.Tensor,
-        actions: torch.Tensor,
-        steps: torch.Tensor | None = None,
-        truth: torch.Tensor | None = None,
-        labels: torch.Tensor | None = None,
-    ) -> tuple:
-        """Training's forward pass, `rollout_hypotheses`: a call through the module, so that
-        DistributedDataParallel sees it."""
-        return self.rollout_hypotheses(image, actions, steps, truth, labels)
+    # Training's forward pass: a call through the module (`net(...)`), so that
+    # DistributedDataParallel sees it.
+    forward = rollout_hypotheses
 
     def rollout(
         self, image: torch.Tensor, actions: torch.Tensor, steps: torch.Tensor | None = None

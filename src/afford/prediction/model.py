@@ -255,16 +255,8 @@ class PredictionNet(Rollouts, nn.Module):
         dc, memory_out, candidates, differences, logits, log_var = self._candidates(
             latent, memory, image, rows
         )
-        b = len(image)
-        if label is not None:
-            picked = label.long()
-        elif truth is not None:
-            picked = winners(candidates, differences, image, truth)
-        elif self.config.hypotheses_by == "effect":
-            picked = (self.probabilities(logits, rows)[:, 1] > self.config.effect_threshold).long()
-        else:
-            picked = logits.argmax(1)
-        at = torch.arange(b, device=image.device)
+        picked = self.pick(candidates, differences, logits, image, rows, truth, label)
+        at = torch.arange(len(image), device=image.device)
         if self.config.fork == "latent":  # the candidate carried on gives eq. (2) its dc, and its memory
             dc, memory_out = dc[at, picked], memory_out[at, picked]
         next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
@@ -276,6 +268,17 @@ class PredictionNet(Rollouts, nn.Module):
             Hypotheses(candidates, logits, picked),
             None if log_var is None else log_var[at, picked],
         )
+
+    def pick(self, candidates, differences, logits, image, rows, truth=None, label=None) -> torch.Tensor:
+        """(B,) the candidate carried on: the one `label` names, else the one nearest `truth`,
+        else by the choice head (`step_hypotheses`)."""
+        if label is not None:
+            return label.long()
+        if truth is not None:
+            return winners(candidates, differences, image, truth)
+        if self.config.hypotheses_by == "effect":
+            return (self.probabilities(logits, rows)[:, 1] > self.config.effect_threshold).long()
+        return logits.argmax(1)
 
     def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         """Weights of a one-hypothesis net for this one (fine-tuning the shipped net with K

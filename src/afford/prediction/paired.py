@@ -26,7 +26,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from afford.prediction.model import Hypotheses, Outcomes, PredictionNet, winners
+from afford.prediction.model import Hypotheses, Outcomes, PredictionNet
 from afford.prediction.rollout import Rollouts
 
 # The side-effect outcome's net beside a weights folder's prediction net: a folder holding it
@@ -96,16 +96,10 @@ class PairedNet(Rollouts, nn.Module):
         return Outcomes(next_latent, next_memory, candidates, self.probabilities(logits, rows))
 
     def step_hypotheses(self, latent, memory, image, rows, truth=None, label=None):
-        """PredictionNet.step_hypotheses for the pair: the outcome carried on is the one `label`
-        names, else the one nearest `truth`, else the side effect where the main head's
-        calibrated probability passes its cut-off. No variance (None, last)."""
+        """PredictionNet.step_hypotheses for the pair: the outcome carried on picked by the main
+        net's rule (`PredictionNet.pick`) among the pair's candidates. No variance (None, last)."""
         latents, memories, candidates, differences, logits = self._outcomes(latent, memory, image, rows)
-        if label is not None:
-            picked = label.long()
-        elif truth is not None:
-            picked = winners(candidates, differences, image, truth)
-        else:
-            picked = (self.probabilities(logits, rows)[:, SIDE] > self.config.effect_threshold).long()
+        picked = self.main.pick(candidates, differences, logits, image, rows, truth, label)
         at = torch.arange(len(image), device=image.device)
         return (
             latents[at, picked],

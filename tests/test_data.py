@@ -279,3 +279,30 @@ def test_continuous_turn_angles_draw_any_angle_and_resume_only_as_made(tmp_path)
     assert turns and all(-180 <= t <= 180 for t in turns) and any(abs(t) != 90 for t in turns)
     with pytest.raises(DataError, match="continuous turns"):
         generate(tmp_path / "c", GenerateConfig(sequences=8, seed=6, workers=1, shard_size=4), progress=False)
+
+
+def test_balances_layout_starts_level_with_the_block_far_off_its_support(tmp_path):
+    from afford.sim.layout import LAYOUTS, random_layout
+
+    offsets = []
+    for i in range(200):
+        specs = random_layout(np.random.default_rng([9, i]), LAYOUTS["balances"])
+        block = next(s for s in specs if s.kind == "block")
+        support = next(s for s in specs if s.kind == "support")  # the first support is the block's
+        offsets.append(np.hypot(block.pos[0] - support.pos[0], block.pos[1] - support.pos[1]))
+    offsets = np.array(offsets)
+    # Beyond 2.5 cm the bare block cannot balance; the default layout never goes past 2 cm.
+    assert offsets.max() <= 0.045 + 1e-9 and (offsets > 0.025).mean() > 0.3
+
+    config = GenerateConfig(sequences=8, seed=4, workers=1, shard_size=4, layout="balances")
+    generate(tmp_path / "b", config, progress=False)
+    data = Dataset(tmp_path / "b")
+    assert data.manifest.generator["layout_name"] == "balances"
+    level = []
+    for i in range(8):
+        seq = data.sequence(i)
+        w, x, y, _ = seq.poses[0, seq.slots.index("block0"), 3:]
+        level.append(1 - 2 * (x * x + y * y))  # the block's up axis, its z component
+    assert min(level) >= LAYOUTS["balances"].level_cos
+    with pytest.raises(DataError, match="balances layout"):
+        generate(tmp_path / "b", GenerateConfig(sequences=8, seed=4, workers=1, shard_size=4), progress=False)

@@ -23,6 +23,7 @@ def cmd_generate(args) -> int:
         shard_size=args.shard_size,
         turn_angles=args.turn_angles,
         actions_drawn=args.actions,
+        layout=args.layout,
         executor="ray" if args.ray is not None else "local",
         address=args.ray or None,
     )
@@ -246,6 +247,14 @@ def add_parsers(sub) -> None:
         "tries up to 12 executions and keeps the first with a side effect (data/draws.py), so that "
         "a prediction net sees more of them (~40%% of executions, against ~12%%); not the paper's "
         "distribution",
+    )
+    g.add_argument(
+        "--layout",
+        choices=("default", "balances"),
+        default="default",
+        help="default: scenes as described in sim/layout.py, every dataset's; balances: the block "
+        "always on one support up to 4.5 cm off its centre, with cups and balls on its ends, so "
+        "that places and grasps near a tipping point are common; not the paper's distribution",
     )
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)

@@ -29,7 +29,7 @@ from afford.data.format import (
 )
 from afford.data.ray_executor import run_on_ray
 from afford.data.shard import TURN_ANGLES, ShardJob, ShardResult, make_shard
-from afford.sim.layout import LayoutConfig
+from afford.sim.layout import LAYOUTS
 from afford.sim.mjcf import slot_names
 
 
@@ -46,6 +46,9 @@ class GenerateConfig:
     # How each step picks its execution (a key of draws.DRAWS): "uniform", the paper's; or
     # "effects", which seeks side effects at every step (our option, not the paper's data).
     actions_drawn: str = "uniform"
+    # The arrangements scenes are drawn from (a key of layout.LAYOUTS): "default", or
+    # "balances", the block on one support far off its centre (our option, not the paper's).
+    layout: str = "default"
     executor: str = "local"  # a key of EXECUTORS
     address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
@@ -99,7 +102,8 @@ def _manifest_for(config: GenerateConfig) -> Manifest:
         splits=default_splits(config.sequences),
         generator={
             "afford": __version__,
-            "layout": asdict(LayoutConfig()),
+            "layout": asdict(LAYOUTS[config.layout]),
+            "layout_name": config.layout,
             "turn_angles": config.turn_angles,
             "actions": config.actions_drawn,
         },
@@ -116,11 +120,14 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
         )
     if config.actions_drawn not in DRAWS:
         raise DataError(f"unknown action draw {config.actions_drawn!r}; expected one of {', '.join(DRAWS)}")
+    if config.layout not in LAYOUTS:
+        raise DataError(f"unknown layout {config.layout!r}; expected one of {', '.join(LAYOUTS)}")
     if (root / "dataset.json").exists():
         m = read_manifest(root)
         turns = m.generator.get("turn_angles", "quarter")
         drawn = m.generator.get("actions", "uniform")
-        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn)
+        layout = m.generator.get("layout_name", "default")
+        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn, layout)
         ours = (
             config.sequences,
             config.seed,
@@ -128,11 +135,13 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
             config.max_steps,
             config.turn_angles,
             config.actions_drawn,
+            config.layout,
         )
         if theirs != ours:
             raise DataError(
                 f"{root}: holds a dataset of {m.sequences} sequences, seed {m.seed}, shard size "
-                f"{m.shard_size}, max steps {m.max_steps}, {turns} turns, {drawn} actions; resume "
+                f"{m.shard_size}, max steps {m.max_steps}, {turns} turns, {drawn} actions, {layout} "
+                "layout; resume "
                 "it with the same settings or use another --out"
             )
         return m
@@ -171,6 +180,7 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
             config.max_steps,
             config.turn_angles,
             config.actions_drawn,
+            config.layout,
         )
         for k in missing
         for r in [manifest.shard_range(k)]

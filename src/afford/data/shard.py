@@ -16,7 +16,7 @@ from afford.data.draws import DRAWS, pose_array
 from afford.data.format import Sequence, quantise, shard_path, write_shard
 from afford.sim.affordance import AFF_WIDTH, encode_affordance
 from afford.sim.affordances import parametrise
-from afford.sim.layout import LayoutConfig, random_layout
+from afford.sim.layout import LAYOUTS, random_layout
 from afford.sim.scene import Scene
 
 TURN_ANGLES = ("quarter", "continuous")
@@ -29,12 +29,17 @@ def make_sequence(
     max_steps: int,
     turn_angles: str = "quarter",
     actions_drawn: str = "uniform",
+    layout: str = "default",
 ) -> tuple[Sequence, int]:
     """Sequence `index` of the dataset with `seed`, and how many drawn executions failed;
-    `actions_drawn`: a key of draws.DRAWS."""
+    `actions_drawn`: a key of draws.DRAWS; `layout`: a key of layout.LAYOUTS."""
     draw = DRAWS[actions_drawn]
     rng = np.random.default_rng([seed, index])
-    scene.reset(random_layout(rng, LayoutConfig()), check=False)  # free of overlaps by construction
+    arrangement = LAYOUTS[layout]
+    for _ in range(arrangement.tries if arrangement.level_start else 1):
+        scene.reset(random_layout(rng, arrangement), check=False)  # free of overlaps by construction
+        if not arrangement.level_start or _block_level(scene, arrangement.level_cos):
+            break
     slots = tuple(name for name, _ in scene.slots)
     rgbs, depths, lists, actions, held, poses = [], [], [], [], [], []
     failed = 0
@@ -74,6 +79,12 @@ def make_sequence(
     return seq, failed
 
 
+def _block_level(scene: Scene, cos: float) -> bool:
+    """Whether the scene's block (if any) rests level, its up axis within `cos` of vertical."""
+    blocks = [o for o in scene.objects() if o.kind == "block"]
+    return all(o.up_axis[2] >= cos for o in blocks)
+
+
 @dataclass(frozen=True)
 class ShardJob:
     root: str  # the dataset folder, as the worker sees it (shared storage on a cluster)
@@ -84,6 +95,7 @@ class ShardJob:
     max_steps: int
     turn_angles: str = "quarter"
     actions_drawn: str = "uniform"
+    layout: str = "default"
 
 
 @dataclass(frozen=True)
@@ -104,7 +116,9 @@ def make_shard(job: ShardJob) -> ShardResult:
         _worker_scene = Scene()
     seqs, failed = [], 0
     for i in range(job.start, job.stop):
-        seq, f = make_sequence(_worker_scene, job.seed, i, job.max_steps, job.turn_angles, job.actions_drawn)
+        seq, f = make_sequence(
+            _worker_scene, job.seed, i, job.max_steps, job.turn_angles, job.actions_drawn, job.layout
+        )
         seqs.append(seq)
         failed += f
     write_shard(shard_path(Path(job.root), job.shard), seqs)

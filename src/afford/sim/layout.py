@@ -4,6 +4,12 @@ Besides objects scattered over the work area, a layout deliberately makes the ar
 where non-canonical effects happen: the block resting on one support (overhanging, so a place
 on its end can tip it), bridging two supports, propped on one support as a slope, objects
 sitting on the block, and objects standing right beside it (in the path of a turn).
+
+`LAYOUTS` names the configurations a dataset may be drawn from: `default`, every dataset's
+unless asked otherwise, and `balances`, the block always on one support and often far off its
+centre, held level by what stands on its other end: the arrangements whose outcome turns on
+millimetres (a counterweight's lever against the load placed), which `default` makes rarely,
+its supports no more than 2 cm off the block's centre.
 """
 
 from __future__ import annotations
@@ -27,8 +33,31 @@ class LayoutConfig:
     p_on_block: float = 0.35  # chance that each cup/ball starts on a free place point of the block
     p_on_support: float = 0.15  # chance that it starts on a free support
     p_beside_block: float = 0.3  # chance that it starts right beside the block
+    # How far the block's centre may lie from its one support (mode one_support), either way.
+    # The support is 5 cm square: within 2.5 cm the bare block balances; beyond, it stays level
+    # only with a weight on its other end, and otherwise tips as the scene settles.
+    support_offset: float = 0.02
+    # Draw the arrangement again (up to `tries` times) while the block settles tilted, so that
+    # every start holds it level: a block that tipped as it settled is no balance left to tip.
+    level_start: bool = False
+    level_cos: float = 0.999  # the block's up axis this near vertical (cosine): level
     gap: float = 0.006  # minimum clearance between footprints
     tries: int = 60
+
+
+LAYOUTS: dict[str, LayoutConfig] = {
+    "default": LayoutConfig(),
+    # The block on one support, up to 4.5 cm off its centre (the support still under it), with
+    # the cups and balls drawn onto its place points twice as often as by default, and every
+    # start level: a block far off its support stands only where a weight holds it.
+    "balances": LayoutConfig(
+        block_modes=("one_support",),
+        block_mode_p=(1.0,),
+        support_offset=0.045,
+        p_on_block=0.7,
+        level_start=True,
+    ),
+}
 
 
 def _yaw_quat(yaw: float, pitch: float = 0.0) -> tuple[float, float, float, float]:
@@ -110,7 +139,7 @@ def _place_block(build: _Build, mode: str) -> None:
         u = np.array([np.cos(yaw), np.sin(yaw)])
         supports, z, pitch = [], BLOCK.half[2], 0.0
         if mode == "one_support":
-            s = np.array([x, y]) - u * rng.uniform(-0.02, 0.02)
+            s = np.array([x, y]) - u * rng.uniform(-build.config.support_offset, build.config.support_offset)
             supports, z = [s], SUPPORT_TOP + BLOCK.half[2]
         elif mode == "two_supports":
             d = rng.uniform(0.07, 0.11)

@@ -132,7 +132,7 @@ def main() -> None:
     c.set(
         xlabel="predicted RMS error at a pixel (sqrt of the variance)",
         ylabel="actual RMS error there",
-        title=f"8 bins of pixels: test ratio {report['variance']['test_ratio_scaled']:.2f} scaled, "
+        title=f"8 pixel bins: ratio {report['variance']['test_ratio_scaled']:.2f} scaled, "
         f"Spearman {report['variance']['test_rank_correlation']:.2f}",
     )
     c.legend(fontsize=7)

@@ -11,6 +11,7 @@ import numpy as np
 from afford.cli.errors import CLIError
 from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
+from afford.sim.layout import LAYOUTS
 
 
 def cmd_generate(args) -> int:
@@ -250,7 +251,7 @@ def add_parsers(sub) -> None:
     )
     g.add_argument(
         "--layout",
-        choices=("default", "balances"),
+        choices=tuple(LAYOUTS),
         default="default",
         help="default: scenes as described in sim/layout.py, every dataset's; balances: the block "
         "always on one support up to 4.5 cm off its centre, with cups and balls on its ends, so "

@@ -25,6 +25,7 @@ def cmd_generate(args) -> int:
         turn_angles=args.turn_angles,
         actions_drawn=args.actions,
         layout=args.layout,
+        images=not args.poses_only,
         executor="ray" if args.ray is not None else "local",
         address=args.ray or None,
     )
@@ -256,6 +257,13 @@ def add_parsers(sub) -> None:
         help="default: scenes as described in sim/layout.py, every dataset's; balances: the block "
         "always on one support up to 4.5 cm off its centre, with cups and balls on its ends, so "
         "that places and grasps near a tipping point are common; not the paper's distribution",
+    )
+    g.add_argument(
+        "--poses-only",
+        action="store_true",
+        help="render nothing: store poses, held objects, affordance lists and the arm's path of "
+        "each execution, with images of size 0; the same seed gives the same poses as with images. "
+        "The data the object world model's dynamics learn from (`afford train dynamics`)",
     )
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from afford.cli import words
+from afford.cli import objects, words
 from afford.cli.errors import CLIError
 from afford.cli.options import add_weights_argument, load_nets
 from afford.training.checkpoint import BEST
@@ -267,6 +267,7 @@ def add_parsers(sub) -> None:
             )
         p.set_defaults(func=cmd_train)
     words.add_train_parser(tsub)
+    objects.add_train_parser(tsub)
 
     e = sub.add_parser("eval", help="evaluate a trained net", description="Evaluate a trained net.")
     esub = e.add_subparsers(dest="net", required=True)
@@ -326,6 +327,7 @@ def add_parsers(sub) -> None:
         q.add_argument("--json", action="store_true")
         q.set_defaults(func=cmd_eval)
     words.add_eval_parser(esub)
+    objects.add_eval_parser(esub)
 
     x = sub.add_parser(
         "export",

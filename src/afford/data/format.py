@@ -52,7 +52,9 @@ class Sequence:
     rgb (T, H, W, 3) uint8; depth (T, H, W) uint16; affordances: per state an (n, 7) float32
     array of AFF_COLUMNS (the ground-truth list); actions (T-1, 7) the executed ones;
     held (T,) int8 slot index of the held object or -1; poses (T, slots, 7) float32 true poses
-    (NaN for a slot not on the table); slots: the object slot names.
+    (NaN for a slot not on the table); slots: the object slot names; arm_paths (T-1, 32, 5) the
+    arm's key points during each execution (`sim/arm_path.py`; None in datasets made before they
+    were recorded). A pose-only dataset (`afford generate --poses-only`) stores images of size 0.
     """
 
     index: int
@@ -63,6 +65,11 @@ class Sequence:
     held: np.ndarray
     poses: np.ndarray
     slots: tuple[str, ...]
+    arm_paths: np.ndarray | None = None
+
+    @property
+    def has_images(self) -> bool:
+        return self.rgb.shape[1] > 0
 
     @property
     def length(self) -> int:
@@ -71,6 +78,11 @@ class Sequence:
 
     def image(self, t: int) -> np.ndarray:
         """State t as the (H, W, 4) float32 RGBD image the nets and the planner use."""
+        if not self.has_images:
+            raise DataError(
+                f"sequence {self.index} has no images: its dataset holds poses only "
+                "(`afford generate --poses-only`); use a dataset made with images"
+            )
         return dequantise(self.rgb[t], self.depth[t])
 
     def action(self, t: int) -> Affordance:
@@ -179,6 +191,8 @@ def write_shard(path: Path, sequences: list[Sequence]) -> None:
         "affordances": np.concatenate([a for s in sequences for a in s.affordances]).reshape(-1, AFF_WIDTH),
         "actions": np.concatenate([s.actions for s in sequences]).reshape(-1, AFF_WIDTH).astype(np.float32),
     }
+    if all(s.arm_paths is not None for s in sequences):
+        arrays["arm_path"] = np.concatenate([s.arm_paths for s in sequences]).astype(np.float32)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     with open(tmp, "wb") as f:
@@ -215,6 +229,9 @@ def _split_shard(a: dict[str, np.ndarray], slots: tuple[str, ...]) -> list[Seque
         raise ValueError("affordance counts do not add up")
     if len(a["actions"]) != n_exec or len(a["index"]) != len(counts):
         raise ValueError("executed-action rows do not add up")
+    paths = a.get("arm_path")
+    if paths is not None and len(paths) != n_exec:
+        raise ValueError("arm path rows do not add up")
     state_start = np.concatenate([[0], np.cumsum(counts)])
     aff_start = np.concatenate([[0], np.cumsum(aff_counts)])
     out = []
@@ -230,6 +247,7 @@ def _split_shard(a: dict[str, np.ndarray], slots: tuple[str, ...]) -> list[Seque
                 held=a["held"][s0:s1],
                 poses=a["poses"][s0:s1],
                 slots=slots,
+                arm_paths=None if paths is None else paths[s0 - k : s1 - k - 1],
             )
         )
     return out
@@ -296,7 +314,10 @@ def shard_summary(path: Path) -> dict[str, np.ndarray]:
     keys = ("index", "state_count", "aff_count", "affordances", "actions", "held", "poses")
     try:
         with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in keys}
+            out = {k: z[k] for k in keys}
+            if "arm_path" in z.files:
+                out["arm_path"] = z["arm_path"]
+            return out
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
         raise DataError(f"{path}: corrupt shard ({type(e).__name__}: {e})") from None
 

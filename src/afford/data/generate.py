@@ -49,6 +49,9 @@ class GenerateConfig:
     # The arrangements scenes are drawn from (a key of layout.LAYOUTS): "default", or
     # "balances", the block on one support far off its centre (our option, not the paper's).
     layout: str = "default"
+    # False: poses, held objects, affordance lists and arm paths, no images (`--poses-only`):
+    # the data the object world model's dynamics learn from, made without rendering.
+    images: bool = True
     executor: str = "local"  # a key of EXECUTORS
     address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
@@ -106,6 +109,7 @@ def _manifest_for(config: GenerateConfig) -> Manifest:
             "layout_name": config.layout,
             "turn_angles": config.turn_angles,
             "actions": config.actions_drawn,
+            "images": config.images,
         },
     )
 
@@ -127,7 +131,8 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
         turns = m.generator.get("turn_angles", "quarter")
         drawn = m.generator.get("actions", "uniform")
         layout = m.generator.get("layout_name", "default")
-        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn, layout)
+        images = m.generator.get("images", True)
+        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn, layout, images)
         ours = (
             config.sequences,
             config.seed,
@@ -136,12 +141,13 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
             config.turn_angles,
             config.actions_drawn,
             config.layout,
+            config.images,
         )
         if theirs != ours:
             raise DataError(
                 f"{root}: holds a dataset of {m.sequences} sequences, seed {m.seed}, shard size "
                 f"{m.shard_size}, max steps {m.max_steps}, {turns} turns, {drawn} actions, {layout} "
-                "layout; resume "
+                f"layout, {'with images' if images else 'poses only'}; resume "
                 "it with the same settings or use another --out"
             )
         return m
@@ -181,6 +187,7 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
             config.turn_angles,
             config.actions_drawn,
             config.layout,
+            config.images,
         )
         for k in missing
         for r in [manifest.shard_range(k)]

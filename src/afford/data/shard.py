@@ -16,6 +16,7 @@ from afford.data.draws import DRAWS, pose_array
 from afford.data.format import Sequence, quantise, shard_path, write_shard
 from afford.sim.affordance import AFF_WIDTH, encode_affordance
 from afford.sim.affordances import parametrise
+from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
 from afford.sim.layout import LAYOUTS, random_layout
 from afford.sim.scene import Scene
 
@@ -30,9 +31,12 @@ def make_sequence(
     turn_angles: str = "quarter",
     actions_drawn: str = "uniform",
     layout: str = "default",
+    images: bool = True,
 ) -> tuple[Sequence, int]:
     """Sequence `index` of the dataset with `seed`, and how many drawn executions failed;
-    `actions_drawn`: a key of draws.DRAWS; `layout`: a key of layout.LAYOUTS."""
+    `actions_drawn`: a key of draws.DRAWS; `layout`: a key of layout.LAYOUTS. Without `images`
+    nothing is rendered and the images have size 0: rendering reads the simulator and never
+    changes it, so the poses are those of the same sequence with images."""
     draw = DRAWS[actions_drawn]
     rng = np.random.default_rng([seed, index])
     arrangement = LAYOUTS[layout]
@@ -41,10 +45,11 @@ def make_sequence(
         if not arrangement.level_start or _block_level(scene, arrangement.level_cos):
             break
     slots = tuple(name for name, _ in scene.slots)
-    rgbs, depths, lists, actions, held, poses = [], [], [], [], [], []
+    rgbs, depths, lists, actions, held, poses, paths = [], [], [], [], [], [], []
+    no_rgb, no_depth = np.zeros((0, 0, 3), np.uint8), np.zeros((0, 0), np.uint16)
     failed = 0
     for step in range(max_steps + 1):
-        rgb, depth = quantise(scene.observe())
+        rgb, depth = quantise(scene.observe()) if images else (no_rgb, no_depth)
         affs = scene.affordances()
         rgbs.append(rgb)
         depths.append(depth)
@@ -66,6 +71,7 @@ def make_sequence(
         if executed is None:
             break
         actions.append(encode_affordance(executed))
+        paths.append(scene.last_path)
     seq = Sequence(
         index=index,
         rgb=np.stack(rgbs),
@@ -75,6 +81,7 @@ def make_sequence(
         held=np.array(held, dtype=np.int8),
         poses=np.stack(poses),
         slots=slots,
+        arm_paths=np.array(paths, dtype=np.float32).reshape(-1, PATH_POINTS, PATH_WIDTH),
     )
     return seq, failed
 
@@ -96,6 +103,7 @@ class ShardJob:
     turn_angles: str = "quarter"
     actions_drawn: str = "uniform"
     layout: str = "default"
+    images: bool = True
 
 
 @dataclass(frozen=True)
@@ -117,7 +125,14 @@ def make_shard(job: ShardJob) -> ShardResult:
     seqs, failed = [], 0
     for i in range(job.start, job.stop):
         seq, f = make_sequence(
-            _worker_scene, job.seed, i, job.max_steps, job.turn_angles, job.actions_drawn, job.layout
+            _worker_scene,
+            job.seed,
+            i,
+            job.max_steps,
+            job.turn_angles,
+            job.actions_drawn,
+            job.layout,
+            job.images,
         )
         seqs.append(seq)
         failed += f

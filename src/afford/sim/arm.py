@@ -35,6 +35,7 @@ class Arm:
             du = 6 * t * (1 - t) / (n * PHYSICS.timestep)
             s.set_arm(q_from + u * (q_to - q_from), f_from + u * (f_to - f_from), dq=du * (q_to - q_from))
             s.step()
+            s.record_tcp()
         self.fingers = f_to
 
     def line(self, tcp_to: np.ndarray, yaw: float, duration: float, waypoints: int = 6) -> bool:
@@ -64,6 +65,7 @@ class Arm:
             seg = path[k + 1] - path[k]
             s.set_arm(path[k] + (u - k) * seg, self.fingers, dq=du * seg)
             s.step()
+            s.record_tcp()
         return True
 
 

@@ -15,6 +15,7 @@ import numpy as np
 from afford.sim.affordance_types import REGISTRY
 from afford.sim.affordances import Affordance
 from afford.sim.arm import Arm, finger_fraction
+from afford.sim.arm_path import key_points
 from afford.sim.constants import MOTION
 
 
@@ -59,6 +60,7 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
         return ExecutionResult(aff, False, scene.held, 0, "out of reach")
 
     arm = Arm(scene)
+    scene.tcp_trace = []
     if scene.held is not None:
         arm.fingers = finger_fraction(scene.kind_of[scene.held])
     arm.move(q_high, MOTION.t_travel)
@@ -78,5 +80,7 @@ def execute(scene, aff: Affordance) -> ExecutionResult:
     scene.set_arm(scene.home_q, fingers_home)
     if scene.held is not None:
         scene.carry_held()
+    scene.last_path = key_points(scene.tcp_trace)
+    scene.tcp_trace = None
     scene.settle()
     return ExecutionResult(aff, True, scene.held, scene.steps - start, message)

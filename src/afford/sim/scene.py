@@ -103,6 +103,11 @@ class Scene:
         self.held: str | None = None
         self.held_drop = 0.0  # TCP height above the held object's lowest point, gripper down
         self.steps = 0  # physics steps taken, for benchmarks
+        # The arm's path during the last execution (`sim/arm_path.py`): read by the pose data,
+        # where what an arm sweeps through is an input of the objects' dynamics.
+        self.tcp_trace: list[tuple] | None = None
+        self._tcp = self.model.site("tcp").id
+        self.last_path: np.ndarray | None = None
         self._camera: cam.RGBDCamera | None = None
         self._eq_data0 = self.model.eq_data.copy()
         self.reset([])
@@ -209,6 +214,17 @@ class Scene:
             for index, (name, _) in enumerate(self.slots):
                 if self.data.qpos[self._qadr[name] + 2] < TABLE.off_table_z:
                     self._park(name, index)
+
+    def record_tcp(self) -> None:
+        """Append the TCP's position, its x axis in the plane and the finger opening to
+        `tcp_trace` (when recording); `sim/arm_path.key_points` turns the axis into a yaw."""
+        if self.tcp_trace is None:
+            return
+        d = self.data
+        m = d.site_xmat[self._tcp]
+        self.tcp_trace.append(
+            (*d.site_xpos[self._tcp], m[0], m[3], d.qpos[self._finger_slice][0] / self._finger_open)
+        )
 
     def moving(self) -> bool:
         for name, _ in self.slots:

@@ -1,0 +1,197 @@
+"""How well the object dynamics predict where objects go, against copying the start state.
+
+Every object of every execution falls in one group: the object acted on (per affordance type,
+when it took no side effect), each side-effect kind it took (`data/effects.py`; an object can
+take two, pushed and toppled), or still (on the table, neither acted on nor affected). An
+object's error is the distance in the state image between its predicted and its true centre
+(`sim/camera.world_to_pixel`; 1 px is about 5 mm on the table), infinite where it is on the
+table but predicted gone. Objects that truly left the table are scored by the off-the-table F1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from afford.data.effects import KINDS as EFFECT_KINDS
+from afford.objects.dynamics import ObjectDynamics, Outcomes, predict
+from afford.objects.transitions import Transitions
+from afford.sim.affordances import TYPES
+from afford.sim.camera import world_to_pixel
+
+NEAR_PX = 3.0
+STILL_PX = 0.5
+MISSING_PX = 1000.0  # the error of an object predicted gone that is still there: past any cut-off
+SIDE = "all side-effect objects"
+STILL = "still"
+CHUNK = 4096  # executions predicted at once
+
+
+def acted_group(kind: str) -> str:
+    return f"acted on ({kind})"
+
+
+GROUPS = (*[acted_group(t) for t in TYPES], *EFFECT_KINDS, SIDE, STILL)
+
+
+@dataclass
+class Errors:
+    """Per group, the pixel errors of the model's likeliest outcome, of its best outcome, and
+    of copying the start."""
+
+    model: dict[str, list[float]] = field(default_factory=lambda: {g: [] for g in GROUPS})
+    best: dict[str, list[float]] = field(default_factory=lambda: {g: [] for g in GROUPS})
+    copy: dict[str, list[float]] = field(default_factory=lambda: {g: [] for g in GROUPS})
+
+
+def pixel_error(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
+    """(...,) image distance between predicted and true centres; MISSING_PX where predicted gone."""
+    gone = np.isnan(pred[..., 0])
+    d = np.linalg.norm(world_to_pixel(np.nan_to_num(pred[..., :3])) - world_to_pixel(true[..., :3]), axis=-1)
+    return np.where(gone, MISSING_PX, d)
+
+
+def predict_all(net: ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> Outcomes:
+    """Outcomes of every execution, from the true start states or from `before` (perceived)."""
+    start = t.before if before is None else before
+    paths = t.paths if net.config.arm_path else None
+    parts = [
+        predict(
+            net,
+            start[i : i + CHUNK],
+            t.held_before[i : i + CHUNK],
+            t.actions[i : i + CHUNK],
+            None if paths is None else paths[i : i + CHUNK],
+        )
+        for i in range(0, len(t), CHUNK)
+    ]
+    return Outcomes(
+        *(np.concatenate([getattr(p, f) for p in parts]) for f in ("poses", "held", "probability"))
+    )
+
+
+def measure(net: ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
+    """The dynamics report on the executions `t` (see the module's docstring)."""
+    outcomes = predict_all(net, t, before)
+    likely, _ = outcomes.likeliest()
+    effects = t.effects()
+    errors = Errors()
+    gone_true, gone_pred = [], []
+    correct, prob = [], []
+    for i, step in enumerate(effects):
+        by_slot: dict[int, list[str]] = {}
+        for e in step.effects:
+            by_slot.setdefault(e.slot, []).append(e.kind)
+        for slot in range(t.before.shape[1]):
+            if np.isnan(t.before[i, slot, 0]):
+                continue
+            truly_gone = np.isnan(t.after[i, slot, 0])
+            gone_true.append(truly_gone)
+            gone_pred.append(bool(np.isnan(likely[i, slot, 0])))
+            if truly_gone:
+                continue
+            groups = by_slot.get(slot, [])
+            if groups:
+                groups = [*groups, SIDE]
+            elif slot == step.acted:
+                groups = [acted_group(step.type)]
+            else:
+                groups = [STILL]
+            model = float(pixel_error(likely[i, slot], t.after[i, slot]))
+            best = float(pixel_error(outcomes.poses[i, :, slot], t.after[i, slot]).min())
+            copy = float(pixel_error(t.before[i, slot], t.after[i, slot]))
+            for g in groups:
+                errors.model[g].append(model)
+                errors.best[g].append(best)
+                errors.copy[g].append(copy)
+        # Calibration: is outcome k right about every object that moves in it or in truth?
+        for k in range(outcomes.poses.shape[1]):
+            correct.append(_outcome_right(t.before[i], t.after[i], outcomes.poses[i, k]))
+            prob.append(float(outcomes.probability[i, k]))
+    return {
+        "executions": len(t),
+        "groups": {g: _summary(errors, g) for g in GROUPS if errors.model[g]},
+        "off_table_f1": _f1(np.array(gone_true), np.array(gone_pred)),
+        "calibration": _calibration(np.array(prob), np.array(correct)),
+    }
+
+
+def _outcome_right(before: np.ndarray, after: np.ndarray, pred: np.ndarray) -> bool:
+    was = ~np.isnan(before[:, 0])
+    if not np.array_equal(np.isnan(after[:, 0]) & was, np.isnan(pred[:, 0]) & was):
+        return False
+    moved_true = was & ~np.isnan(after[:, 0]) & (pixel_error(before, after) > 1.0)
+    moved_pred = was & ~np.isnan(pred[:, 0]) & (pixel_error(before, pred) > 1.0)
+    check = (moved_true | moved_pred) & ~np.isnan(after[:, 0])
+    return bool(np.all(pixel_error(pred[check], after[check]) < NEAR_PX))
+
+
+def _summary(errors: Errors, g: str) -> dict:
+    m, b, c = (np.array(x[g]) for x in (errors.model, errors.best, errors.copy))
+    return {
+        "n": len(m),
+        "copy_median_px": float(np.median(c)),
+        "copy_p90_px": float(np.percentile(c, 90)),
+        "median_px": float(np.median(m)),
+        "p90_px": float(np.percentile(m, 90)),
+        "within_3px": float(np.mean(m < NEAR_PX)),
+        "within_0.5px": float(np.mean(m < STILL_PX)),
+        "best_of_k_within_3px": float(np.mean(b < NEAR_PX)),
+        "best_of_k_median_px": float(np.median(b)),
+    }
+
+
+def _f1(truth: np.ndarray, pred: np.ndarray) -> dict:
+    tp = int(np.sum(truth & pred))
+    fp = int(np.sum(~truth & pred))
+    fn = int(np.sum(truth & ~pred))
+    precision = tp / (tp + fp) if tp + fp else 0.0
+    recall = tp / (tp + fn) if tp + fn else 0.0
+    f1 = 2 * precision * recall / (precision + recall) if precision + recall else 0.0
+    return {"f1": f1, "precision": precision, "recall": recall, "gone": int(truth.sum())}
+
+
+def _calibration(prob: np.ndarray, correct: np.ndarray, bins: int = 10, least: int = 20) -> dict:
+    """Per decile of predicted probability, the share of outcomes that were right; the largest
+    gap over deciles holding at least `least` outcomes."""
+    edges = np.linspace(0, 1, bins + 1)
+    rows = []
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        inside = (prob >= lo) & ((prob < hi) | (hi == 1.0))
+        if inside.sum():
+            rows.append(
+                {
+                    "from": lo,
+                    "to": hi,
+                    "n": int(inside.sum()),
+                    "mean_p": float(prob[inside].mean()),
+                    "share_right": float(correct[inside].mean()),
+                }
+            )
+    gaps = [abs(r["mean_p"] - r["share_right"]) for r in rows if r["n"] >= least]
+    return {"deciles": rows, "largest_gap": max(gaps) if gaps else None}
+
+
+def table(report: dict) -> str:
+    """The report as a text table, one row a group."""
+    head = (
+        f"{'objects':26s} {'n':>6s} {'copy med/p90':>13s} {'model med/p90':>14s} "
+        f"{'<3px':>6s} {'<0.5px':>7s} {'best<3px':>9s}"
+    )
+    lines = [head, "-" * len(head)]
+    for g, r in report["groups"].items():
+        lines.append(
+            f"{g:26s} {r['n']:6d} {r['copy_median_px']:6.1f}/{r['copy_p90_px']:<6.1f} "
+            f"{r['median_px']:6.2f}/{r['p90_px']:<7.2f} {r['within_3px']:6.2f} {r['within_0.5px']:7.2f} "
+            f"{r['best_of_k_within_3px']:9.2f}"
+        )
+    f1 = report["off_table_f1"]
+    lines.append(
+        f"off the table: F1 {f1['f1']:.3f} (precision {f1['precision']:.3f}, "
+        f"recall {f1['recall']:.3f}, n {f1['gone']})"
+    )
+    cal = report["calibration"]
+    gap = cal["largest_gap"]
+    lines.append("calibration, largest gap over deciles: " + ("n/a" if gap is None else f"{gap:.3f}"))
+    return "\n".join(lines)

@@ -1,0 +1,116 @@
+"""`afford train dynamics`: the object dynamics nets (P^a over objects) on true poses.
+
+Examples are whole executions (`transitions.py`), from the train split of one dataset or
+several; batches are drawn at random and encoded on the fly, which costs little beside the
+nets. Validation is the val split's mixture loss.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from afford.data.format import DataError
+from afford.objects.dynamics import (
+    DynamicsConfig,
+    ObjectDynamics,
+    encode_inputs,
+    encode_targets,
+    mirror,
+    mixture_loss,
+)
+from afford.objects.transitions import Transitions, read_transitions
+from afford.training.loop import Loop, LoopState, run, warmup_cosine
+
+KIND = "dynamics"
+VAL_EXECUTIONS = 2000  # per evaluation: enough to follow the loss, a second on a CPU
+
+
+def batch_of(t: Transitions, rows: np.ndarray, config: DynamicsConfig, rng: np.random.Generator | None):
+    """Inputs and targets of the executions `rows`; with `rng`, mirrored at random and with
+    noise on the input positions as the config asks (training only)."""
+    before, after, actions, paths = t.before[rows], t.after[rows], t.actions[rows], t.paths[rows]
+    if rng is not None and config.mirror:
+        flip = rng.random(len(rows)) < 0.5
+        mb, ma, mact, mp = mirror(before, after, actions, paths)
+        before = np.where(flip[:, None, None], mb, before)
+        after = np.where(flip[:, None, None], ma, after)
+        actions = np.where(flip[:, None], mact, actions)
+        paths = np.where(flip[:, None, None], mp, paths)
+    seen = before
+    if rng is not None and config.input_noise > 0:
+        seen = before.copy()
+        seen[..., :3] += rng.normal(0.0, config.input_noise, seen[..., :3].shape)
+    inputs = encode_inputs(seen, t.held_before[rows], actions, paths if config.arm_path else None, config)
+    return inputs, encode_targets(seen, after, t.held_after[rows], config)
+
+
+def load(data_dirs: list[str | Path], split: str) -> Transitions:
+    parts = [read_transitions(d, split) for d in data_dirs]
+    t = Transitions.concatenate(parts)
+    if len(t) == 0:
+        raise DataError(f"{', '.join(map(str, data_dirs))}: no executions in the {split} split")
+    return t
+
+
+def train(
+    data_dirs: list[str | Path],
+    config: DynamicsConfig,
+    run_dir: str | Path,
+    progress: bool = True,
+    limit: float | None = None,
+) -> LoopState:
+    """Train into `run_dir` (resuming from its last checkpoint) on the train splits of
+    `data_dirs`, validating on the first's val split; `limit`: use only this share of the
+    training executions (a learning curve)."""
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(config.seed)
+    rng = np.random.default_rng(config.seed)
+    train_set = load(data_dirs, "train")
+    if limit is not None:
+        keep = np.random.default_rng(0).permutation(len(train_set))[: max(1, int(limit * len(train_set)))]
+        train_set = train_set.subset(np.sort(keep))
+    val_set = load(data_dirs[:1], "val")
+    val_rows = np.linspace(0, len(val_set) - 1, min(VAL_EXECUTIONS, len(val_set))).astype(int)
+    val_batch = batch_of(val_set, val_rows, config, None)
+    net = ObjectDynamics(config)
+    opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=1e-4)
+
+    class Batches:
+        def __iter__(self):
+            for _ in range(max(1, len(train_set) // config.batch)):
+                yield batch_of(train_set, rng.integers(0, len(train_set), config.batch), config, rng)
+
+    def train_step(batch):
+        inputs, targets = batch
+        return mixture_loss(net(inputs), targets, config.spread)
+
+    def validate() -> dict[str, float]:
+        loss, parts = mixture_loss(net(val_batch[0]), val_batch[1], config.spread)
+        return {"loss": float(loss), **parts}
+
+    loop = Loop(
+        kind=KIND,
+        config=config,
+        model=net,
+        optimizer=opt,
+        batches=Batches(),
+        train_step=train_step,
+        validate=validate,
+        lr_at=warmup_cosine(config.warmup, config.steps),
+    )
+    state = run(loop, run_dir, progress)
+    (Path(run_dir) / "data.txt").write_text(
+        "".join(f"{d}\n" for d in data_dirs) + f"training executions: {len(train_set)}\n"
+    )
+    return state
+
+
+def load_dynamics(path: str | Path) -> ObjectDynamics:
+    """A trained dynamics net from a checkpoint or shipped weights file."""
+    from afford.training.checkpoint import load_net_from_checkpoint
+
+    net, _, _ = load_net_from_checkpoint(path, KIND, DynamicsConfig, ObjectDynamics)
+    return net

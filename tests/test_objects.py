@@ -1,0 +1,201 @@
+"""The object world model's data and dynamics: pose-only generation, the arm's path, the state
+encoding, and the dynamics nets at tiny sizes."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import torch
+
+from afford.data.format import DataError, Dataset
+from afford.data.generate import GenerateConfig, generate
+from afford.data.shard import make_sequence
+from afford.objects.dynamics import (
+    PRESETS,
+    ObjectDynamics,
+    encode_inputs,
+    encode_targets,
+    mirror,
+    mixture_loss,
+    predict,
+)
+from afford.objects.state import axes_quat, quat_axes, slot_features
+from afford.objects.transitions import read_transitions
+from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
+
+TINY = dataclasses.replace(PRESETS["tiny"], threads=1)
+
+
+@pytest.fixture(scope="module")
+def pose_dataset(tmp_path_factory):
+    root = tmp_path_factory.mktemp("poses") / "p"
+    generate(root, GenerateConfig(sequences=8, seed=3, workers=1, shard_size=4, images=False), progress=False)
+    return root
+
+
+def test_pose_generator_gives_the_rendering_generators_states(scene):
+    for i in range(2):
+        with_images, _ = make_sequence(scene, 5, i, 4, images=True)
+        poses_only, _ = make_sequence(scene, 5, i, 4, images=False)
+        assert with_images.has_images and not poses_only.has_images
+        np.testing.assert_array_equal(with_images.poses, poses_only.poses)
+        np.testing.assert_array_equal(with_images.held, poses_only.held)
+        np.testing.assert_array_equal(with_images.actions, poses_only.actions)
+        np.testing.assert_array_equal(with_images.arm_paths, poses_only.arm_paths)
+        assert poses_only.arm_paths.shape == (poses_only.length, PATH_POINTS, PATH_WIDTH)
+
+
+def test_the_arm_path_reaches_down_to_what_it_grasps(scene):
+    seq, _ = make_sequence(scene, 5, 0, 4, images=False)
+    grasps = [t for t in range(seq.length) if seq.action(t).type == "grasp"]
+    assert grasps
+    for t in grasps:
+        path, target = seq.arm_paths[t], seq.actions[t, 1:4]
+        lowest = path[np.argmin(path[:, 2])]
+        # the TCP comes down to the object's centre, above it in the plane, and ends home
+        assert np.linalg.norm(lowest[:2] - target[:2]) < 0.01 and lowest[2] < target[2] + 0.05
+        assert path[-1, 2] > 0.25 and 0.0 <= path[:, 4].min() and path[:, 4].max() <= 1.05
+
+
+def test_a_pose_only_dataset_says_it_has_no_images(pose_dataset):
+    data = Dataset(pose_dataset)
+    assert data.manifest.generator["images"] is False
+    seq = data.sequence(0)
+    with pytest.raises(DataError, match="poses only"):
+        seq.image(0)
+    with pytest.raises(DataError, match="poses only"):
+        generate(pose_dataset, GenerateConfig(sequences=8, seed=3, workers=1, shard_size=4), progress=False)
+    t = read_transitions(pose_dataset)
+    assert len(t) == sum(data.sequence(i).length for i in range(8))
+    assert not np.isnan(t.paths).any()
+
+
+def test_axes_give_back_the_quaternion():
+    rng = np.random.default_rng(0)
+    q = rng.normal(size=(50, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    up, along = quat_axes(q)
+    back = axes_quat(up, along)
+    np.testing.assert_allclose(np.abs((back * q).sum(1)), 1.0, atol=1e-9)  # q and -q are one pose
+
+
+def test_mirroring_twice_is_the_identity(pose_dataset):
+    t = read_transitions(pose_dataset)
+    once = mirror(t.before, t.after, t.actions, t.paths)
+    twice = mirror(*once)
+    for a, b in zip(twice, (t.before, t.after, t.actions, t.paths), strict=True):
+        np.testing.assert_allclose(np.cos(np.radians(a)), np.cos(np.radians(b)), atol=1e-4)  # yaws wrap
+        np.testing.assert_allclose(np.sin(np.radians(a)), np.sin(np.radians(b)), atol=1e-4)
+    assert not np.allclose(once[0][:, :, 0], t.before[:, :, 0], equal_nan=True)
+
+
+def test_features_mark_absent_and_held_objects(pose_dataset):
+    t = read_transitions(pose_dataset)
+    f, present = slot_features(t.before, t.held_before)
+    assert f.shape[:2] == t.before.shape[:2]
+    assert np.all(f[~present] == 0)
+    held_rows = np.nonzero(t.held_before >= 0)[0]
+    assert len(held_rows)
+    for i in held_rows:
+        assert f[i, t.held_before[i], 1] == 1 and f[i, :, 1].sum() == 1
+
+
+def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset):
+    torch.manual_seed(0)
+    t = read_transitions(pose_dataset)
+    config = dataclasses.replace(TINY, arm_path=True, outcomes=2)
+    net = ObjectDynamics(config)
+    inputs = encode_inputs(t.before, t.held_before, t.actions, t.paths, config)
+    targets = encode_targets(t.before, t.after, t.held_after, config)
+    out = net(inputs)
+    n, s = t.before.shape[:2]
+    assert out["dpos"].shape == (n, s, 2, 3) and out["outcome"].shape == (n, 2)
+    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+    losses = []
+    for _ in range(60):
+        loss, _ = mixture_loss(net(inputs), targets, config.spread)
+        opt.zero_grad()
+        loss.backward()
+        losses.append(float(loss.detach()))
+        opt.step()
+    assert all(p.grad is not None for p in net.parameters())
+    assert losses[-1] < 0.5 * losses[0]
+
+
+def test_the_gate_copies_still_objects_exactly(pose_dataset):
+    t = read_transitions(pose_dataset)
+    net = ObjectDynamics(TINY)
+    for p in net.p.values():  # every object called still, and never gone or held
+        last = p.head[-1]
+        torch.nn.init.zeros_(last.weight)
+        with torch.no_grad():
+            last.bias.zero_()
+            last.bias.view(TINY.outcomes, -1)[:, :3] = -20.0
+    o = predict(net, t.before, t.held_before, t.actions)
+    for k in range(TINY.outcomes):
+        np.testing.assert_array_equal(o.poses[:, k], t.before)
+    assert np.all(o.held == -1)
+    np.testing.assert_allclose(o.probability.sum(1), 1.0, atol=1e-6)
+
+
+def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, capsys):
+    from afford.cli.main import main
+
+    run = tmp_path / "run"
+    assert (
+        main(
+            [
+                "train",
+                "dynamics",
+                "--data",
+                str(pose_dataset),
+                "--preset",
+                "tiny",
+                "--out",
+                str(run),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    assert (run / "last.safetensors").is_file()
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "eval",
+                "dynamics",
+                "--weights",
+                str(run / "last.safetensors"),
+                "--data",
+                str(pose_dataset),
+                "--split",
+                "all",
+                "--json",
+            ]
+        )
+        == 0
+    )
+    import json
+
+    report = json.loads(capsys.readouterr().out)
+    assert report["executions"] > 0 and "still" in report["groups"]
+    # a weights file of another kind: one line
+    from afford.shipped import WEIGHTS
+
+    assert (
+        main(
+            [
+                "eval",
+                "dynamics",
+                "--weights",
+                str(WEIGHTS / "prediction.safetensors"),
+                "--data",
+                str(pose_dataset),
+            ]
+        )
+        == 2
+    )
+    assert "not a dynamics one" in capsys.readouterr().err

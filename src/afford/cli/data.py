@@ -26,6 +26,7 @@ def cmd_generate(args) -> int:
         actions_drawn=args.actions,
         layout=args.layout,
         images=not args.poses_only,
+        masks=args.masks,
         executor="ray" if args.ray is not None else "local",
         address=args.ray or None,
     )
@@ -264,6 +265,12 @@ def add_parsers(sub) -> None:
         help="render nothing: store poses, held objects, affordance lists and the arm's path of "
         "each execution, with images of size 0; the same seed gives the same poses as with images. "
         "The data the object world model's dynamics learn from (`afford train dynamics`)",
+    )
+    g.add_argument(
+        "--masks",
+        action="store_true",
+        help="also keep each state's instance mask (the object slot seen at each pixel, from MuJoCo's "
+        "segmentation rendering): the ground truth the object perception net learns from",
     )
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)

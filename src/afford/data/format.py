@@ -66,6 +66,7 @@ class Sequence:
     poses: np.ndarray
     slots: tuple[str, ...]
     arm_paths: np.ndarray | None = None
+    masks: np.ndarray | None = None  # (T, H, W) int8 slot seen per pixel, -1 none (`--masks`)
 
     @property
     def has_images(self) -> bool:
@@ -191,6 +192,8 @@ def write_shard(path: Path, sequences: list[Sequence]) -> None:
         "affordances": np.concatenate([a for s in sequences for a in s.affordances]).reshape(-1, AFF_WIDTH),
         "actions": np.concatenate([s.actions for s in sequences]).reshape(-1, AFF_WIDTH).astype(np.float32),
     }
+    if all(s.masks is not None for s in sequences):
+        arrays["masks"] = np.concatenate([s.masks for s in sequences]).astype(np.int8)
     if all(s.arm_paths is not None for s in sequences):
         arrays["arm_path"] = np.concatenate([s.arm_paths for s in sequences]).astype(np.float32)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -229,7 +232,9 @@ def _split_shard(a: dict[str, np.ndarray], slots: tuple[str, ...]) -> list[Seque
         raise ValueError("affordance counts do not add up")
     if len(a["actions"]) != n_exec or len(a["index"]) != len(counts):
         raise ValueError("executed-action rows do not add up")
-    paths = a.get("arm_path")
+    paths, masks = a.get("arm_path"), a.get("masks")
+    if masks is not None and len(masks) != n_states:
+        raise ValueError("mask rows do not add up")
     if paths is not None and len(paths) != n_exec:
         raise ValueError("arm path rows do not add up")
     state_start = np.concatenate([[0], np.cumsum(counts)])
@@ -248,6 +253,7 @@ def _split_shard(a: dict[str, np.ndarray], slots: tuple[str, ...]) -> list[Seque
                 poses=a["poses"][s0:s1],
                 slots=slots,
                 arm_paths=None if paths is None else paths[s0 - k : s1 - k - 1],
+                masks=None if masks is None else masks[s0:s1],
             )
         )
     return out

@@ -52,6 +52,9 @@ class GenerateConfig:
     # False: poses, held objects, affordance lists and arm paths, no images (`--poses-only`):
     # the data the object world model's dynamics learn from, made without rendering.
     images: bool = True
+    # True: each state also keeps its instance mask (the slot seen per pixel), which the object
+    # perception net learns from (`--masks`).
+    masks: bool = False
     executor: str = "local"  # a key of EXECUTORS
     address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
@@ -110,6 +113,7 @@ def _manifest_for(config: GenerateConfig) -> Manifest:
             "turn_angles": config.turn_angles,
             "actions": config.actions_drawn,
             "images": config.images,
+            "masks": config.masks,
         },
     )
 
@@ -124,6 +128,8 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
         )
     if config.actions_drawn not in DRAWS:
         raise DataError(f"unknown action draw {config.actions_drawn!r}; expected one of {', '.join(DRAWS)}")
+    if config.masks and not config.images:
+        raise DataError("--masks needs images: instance masks are of the state images")
     if config.layout not in LAYOUTS:
         raise DataError(f"unknown layout {config.layout!r}; expected one of {', '.join(LAYOUTS)}")
     if (root / "dataset.json").exists():
@@ -132,7 +138,8 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
         drawn = m.generator.get("actions", "uniform")
         layout = m.generator.get("layout_name", "default")
         images = m.generator.get("images", True)
-        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn, layout, images)
+        masks = m.generator.get("masks", False)
+        theirs = (m.sequences, m.seed, m.shard_size, m.max_steps, turns, drawn, layout, images, masks)
         ours = (
             config.sequences,
             config.seed,
@@ -142,12 +149,13 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
             config.actions_drawn,
             config.layout,
             config.images,
+            config.masks,
         )
         if theirs != ours:
             raise DataError(
                 f"{root}: holds a dataset of {m.sequences} sequences, seed {m.seed}, shard size "
                 f"{m.shard_size}, max steps {m.max_steps}, {turns} turns, {drawn} actions, {layout} "
-                f"layout, {'with images' if images else 'poses only'}; resume "
+                f"layout, {'with images' if images else 'poses only'}{', masks' if masks else ''}; resume "
                 "it with the same settings or use another --out"
             )
         return m
@@ -188,6 +196,7 @@ def generate(root: str | Path, config: GenerateConfig, progress: bool = True) ->
             config.actions_drawn,
             config.layout,
             config.images,
+            config.masks,
         )
         for k in missing
         for r in [manifest.shard_range(k)]

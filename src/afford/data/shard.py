@@ -32,11 +32,13 @@ def make_sequence(
     actions_drawn: str = "uniform",
     layout: str = "default",
     images: bool = True,
+    masks: bool = False,
 ) -> tuple[Sequence, int]:
     """Sequence `index` of the dataset with `seed`, and how many drawn executions failed;
     `actions_drawn`: a key of draws.DRAWS; `layout`: a key of layout.LAYOUTS. Without `images`
     nothing is rendered and the images have size 0: rendering reads the simulator and never
-    changes it, so the poses are those of the same sequence with images."""
+    changes it, so the poses are those of the same sequence with images. With `masks`, each state
+    also keeps the slot seen at each pixel (`Scene.instance_mask`)."""
     draw = DRAWS[actions_drawn]
     rng = np.random.default_rng([seed, index])
     arrangement = LAYOUTS[layout]
@@ -45,12 +47,14 @@ def make_sequence(
         if not arrangement.level_start or _block_level(scene, arrangement.level_cos):
             break
     slots = tuple(name for name, _ in scene.slots)
-    rgbs, depths, lists, actions, held, poses, paths = [], [], [], [], [], [], []
+    rgbs, depths, lists, actions, held, poses, paths, seen = [], [], [], [], [], [], [], []
     no_rgb, no_depth = np.zeros((0, 0, 3), np.uint8), np.zeros((0, 0), np.uint16)
     failed = 0
     for step in range(max_steps + 1):
         rgb, depth = quantise(scene.observe()) if images else (no_rgb, no_depth)
         affs = scene.affordances()
+        if masks:
+            seen.append(scene.instance_mask())
         rgbs.append(rgb)
         depths.append(depth)
         lists.append(np.array([encode_affordance(a) for a in affs], dtype=np.float32).reshape(-1, AFF_WIDTH))
@@ -82,6 +86,7 @@ def make_sequence(
         poses=np.stack(poses),
         slots=slots,
         arm_paths=np.array(paths, dtype=np.float32).reshape(-1, PATH_POINTS, PATH_WIDTH),
+        masks=np.stack(seen) if masks else None,
     )
     return seq, failed
 
@@ -104,6 +109,7 @@ class ShardJob:
     actions_drawn: str = "uniform"
     layout: str = "default"
     images: bool = True
+    masks: bool = False
 
 
 @dataclass(frozen=True)
@@ -133,6 +139,7 @@ def make_shard(job: ShardJob) -> ShardResult:
             job.actions_drawn,
             job.layout,
             job.images,
+            job.masks,
         )
         seqs.append(seq)
         failed += f

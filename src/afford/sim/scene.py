@@ -355,6 +355,16 @@ class Scene:
         """How many pixels of the state image show the object `name`."""
         return int(np.count_nonzero(self._cam().segment(self.data) == self._body[name]))
 
+    def instance_mask(self) -> np.ndarray:
+        """(H, W) int8: the slot index (`self.slots`) of the object seen at each pixel of the state
+        image, -1 where none is (table, arm, background): MuJoCo's segmentation rendering from
+        the state camera, the ground truth that perception learns."""
+        body = self._cam().segment(self.data)
+        lookup = np.full(self.model.nbody + 1, -1, dtype=np.int8)
+        for index, (name, _) in enumerate(self.slots):
+            lookup[self._body[name]] = index
+        return lookup[body]  # -1 (no geom) indexes the last entry, which is -1
+
     def _cam(self) -> cam.RGBDCamera:
         """The renderer, made on first use (it needs a GL context)."""
         if self._camera is None:

@@ -51,12 +51,97 @@ def cmd_eval_dynamics(args) -> int:
         raise CLIError(f"{args.data}: no executions in the {args.split} split")
     if net.config.arm_path and t.paths.size and (t.paths != t.paths).any():
         raise CLIError(f"{args.data}: no arm paths recorded, and {args.weights} takes them as input")
-    report = measure(net, t)
-    report = {"weights": str(args.weights), "data": str(args.data), "split": args.split, **report}
+    before, seen_by = None, "true"
+    if args.perception:
+        before, seen_by = perceived_starts(args.perception, args.data, t), str(args.perception)
+    report = measure(net, t, before)
+    report = {
+        "weights": str(args.weights),
+        "data": str(args.data),
+        "split": args.split,
+        "start": seen_by,
+        **report,
+    }
     if args.out:
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else table(report))
+    return 0
+
+
+def perceived_starts(perception: str, data_dir: str, t):
+    """Each execution's start state as the perception net sees it in the start image, its
+    objects in the slots of the true objects they match (`perception_measure.aligned_state`)."""
+    import numpy as np
+
+    from afford.data.format import Dataset
+    from afford.objects.perceive import perceive
+    from afford.objects.perception_measure import aligned_state
+    from afford.objects.perception_train import load_perception
+
+    net = load_perception(perception)
+    data = Dataset(data_dir)
+    before = np.full_like(t.before, np.nan)
+    held = np.full_like(t.held_before, -1)
+    for start in range(0, len(t), 256):
+        rows = range(start, min(start + 256, len(t)))
+        seqs = [data.sequence(int(t.sequence[r])) for r in rows]
+        steps = [int(t.step[r]) for r in rows]
+        seen = perceive(net, np.stack([s.image(k) for s, k in zip(seqs, steps, strict=True)]))
+        for r, s, k, objects in zip(rows, seqs, steps, seen, strict=True):
+            if s.masks is None:
+                raise CLIError(
+                    f"{data_dir}: no instance masks, needed to match perceived objects to true ones"
+                )
+            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k])
+    t.held_before = held
+    return before
+
+
+def cmd_train_perception(args) -> int:
+    from afford.objects.perception import PRESETS
+    from afford.objects.perception_train import train
+    from afford.training.overrides import apply_overrides, preset_config
+
+    config = apply_overrides(
+        preset_config(PRESETS, args.preset, steps=args.steps, threads=args.threads), args.set
+    )
+    try:
+        state = train(args.data, config, args.out, not args.json)
+    except KeyboardInterrupt:
+        print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
+        return 130
+    record = {
+        "run": str(args.out),
+        "steps": state.step,
+        "best_val_loss": state.best,
+        "training_seconds": round(state.seconds, 1),
+    }
+    print(
+        json.dumps(record, indent=2)
+        if args.json
+        else f"{args.out}: {state.step} steps in {state.seconds / 60:.1f} min, best val loss {state.best:.4f}"
+    )
+    return 0
+
+
+def cmd_eval_objects(args) -> int:
+    from afford.data.format import Dataset
+    from afford.objects.perception_measure import measure_perception, perception_table
+    from afford.objects.perception_train import load_perception
+
+    net = load_perception(args.weights)
+    split = None if args.split == "all" else args.split
+    report = {
+        "weights": str(args.weights),
+        "data": str(args.data),
+        "split": args.split,
+        **measure_perception(net, Dataset(args.data), split, args.limit),
+    }
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.out).write_text(json.dumps(report, indent=2) + "\n")
+    print(json.dumps(report, indent=2) if args.json else perception_table(report))
     return 0
 
 
@@ -92,6 +177,26 @@ def add_train_parser(tsub) -> None:
     p.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     p.set_defaults(func=cmd_train_dynamics)
 
+    from afford.objects.perception import PRESETS as SEEING
+
+    q = tsub.add_parser(
+        "perception",
+        help="train the object perception net (E over objects)",
+        description="Train the net that sees the objects in a state image: per pixel the kind seen, "
+        "centre maps, offsets to the centre, height, axes and held (objects/perception.py), on a "
+        "dataset made with `afford generate --masks`. Resumable like every training run.",
+    )
+    q.add_argument("--data", required=True, metavar="DIR", help="a dataset with instance masks")
+    q.add_argument("--out", required=True, metavar="RUN")
+    q.add_argument("--preset", choices=tuple(SEEING), default="cpu")
+    q.add_argument("--steps", type=int, help="override the preset's number of batches")
+    q.add_argument("--threads", type=int, help="torch threads (default: the preset's)")
+    q.add_argument(
+        "--set", action="append", metavar="KEY=VALUE", help="change one field of the preset's config"
+    )
+    q.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
+    q.set_defaults(func=cmd_train_perception)
+
 
 def add_eval_parser(esub) -> None:
     p = esub.add_parser(
@@ -113,5 +218,28 @@ def add_eval_parser(esub) -> None:
     )
     p.add_argument("--limit", type=int, metavar="N", help="the split's first N sequences")
     p.add_argument("--out", metavar="FILE.json", help="also write the report here")
+    p.add_argument(
+        "--perception",
+        metavar="FILE",
+        help="start from the states this perception net sees in the start images (the dataset needs "
+        "images and masks) instead of the true states",
+    )
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_eval_dynamics)
+
+    q = esub.add_parser(
+        "objects",
+        help="how well perception sees the objects",
+        description="Run the perception net on every state image of a split (a dataset made with "
+        "`afford generate --masks`) and report: the share of visible objects (20 pixels or more) found, "
+        "spurious objects per image, kind right, centre error in the image (median, 95th percentile) "
+        "and in 3D, upright / tipped / lying right, the block's tilt, mask IoU, the held object right, "
+        "and images per second.",
+    )
+    q.add_argument("--weights", required=True, metavar="FILE", help="a perception checkpoint or weights file")
+    q.add_argument("--data", required=True, metavar="DIR")
+    q.add_argument("--split", choices=("train", "val", "test", "all"), default="test")
+    q.add_argument("--limit", type=int, metavar="N", help="at most N images, evenly spread")
+    q.add_argument("--out", metavar="FILE.json", help="also write the report here")
+    q.add_argument("--json", action="store_true")
+    q.set_defaults(func=cmd_eval_objects)

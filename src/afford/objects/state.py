@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from afford.sim.constants import TABLE
+from afford.sim.constants import TABLE, TOLERANCES
 from afford.sim.mjcf import slot_names
 
 SLOTS = tuple(slot_names())
@@ -90,3 +90,18 @@ def uprightness(poses: np.ndarray) -> np.ndarray:
     """(..., slots) the z component of each object's up axis: 1 upright, 0 lying, -1 upside down."""
     up, _ = quat_axes(np.nan_to_num(poses[..., 3:7]))
     return up[..., 2]
+
+
+# How an object stands, from its up axis: what a person would say of a cup seen from above.
+POSTURES = ("upright", "tipped", "lying")
+LYING_COS = 0.42  # an axis more than 65 degrees off vertical: lying on its side
+
+
+def posture(up_z: float) -> str:
+    """upright (axis within 25 degrees of vertical), lying (more than 65 off), else tipped;
+    upside down counts as tipped."""
+    if up_z >= TOLERANCES.upright_cos:
+        return "upright"
+    if abs(up_z) <= LYING_COS:
+        return "lying"
+    return "tipped"

@@ -20,7 +20,7 @@ from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
 class Transitions:
     """N executions: poses (N, slots, 7) before and after, held slots before and after (-1:
     none), the executed affordance rows (N, 7), the arm's key points (N, 32, 5; NaN where the
-    dataset has none) and which sequence each came from."""
+    dataset has none), and which sequence and step each came from."""
 
     before: np.ndarray
     after: np.ndarray
@@ -29,6 +29,7 @@ class Transitions:
     actions: np.ndarray
     paths: np.ndarray
     sequence: np.ndarray
+    step: np.ndarray  # which execution of its sequence (its start is state `step`)
 
     def __len__(self) -> int:
         return len(self.actions)
@@ -88,6 +89,7 @@ def read_transitions(root: str | Path, split: str | None = None, limit: int | No
                     else np.full((n - 1, PATH_POINTS, PATH_WIDTH), np.nan, np.float32)
                 )
                 parts["sequence"].append(np.full(n - 1, index))
+                parts["step"].append(np.arange(n - 1))
             s0 += n
     if not parts["actions"]:
         return Transitions(
@@ -97,6 +99,7 @@ def read_transitions(root: str | Path, split: str | None = None, limit: int | No
             np.zeros(0, np.int8),
             np.zeros((0, AFF_WIDTH), np.float32),
             np.zeros((0, PATH_POINTS, PATH_WIDTH), np.float32),
+            np.zeros(0, np.int64),
             np.zeros(0, np.int64),
         )
     return Transitions(**{k: np.concatenate(v) for k, v in parts.items()})

@@ -1,0 +1,87 @@
+"""`afford train perception`: the object perception net on images with instance masks
+(`afford generate --masks`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from afford.data.format import DataError, Dataset
+from afford.objects.perception import PerceptionConfig, PerceptionNet, loss, targets
+from afford.training.loop import Loop, LoopState, run, warmup_cosine
+
+KIND = "perception"
+VAL_IMAGES = 64
+
+
+def states_of(data: Dataset, split: str | None) -> list[tuple[int, int]]:
+    """Every (sequence, state) of a split (None: all); DataError if the dataset lacks masks."""
+    if not data.manifest.generator.get("masks", False):
+        raise DataError(
+            f"{data.root}: no instance masks; make the dataset with `afford generate --masks` "
+            "to train or measure perception"
+        )
+    return [(i, t) for i in data.indices(split) for t in range(data.sequence(i).length + 1)]
+
+
+def batch_of(data: Dataset, items: list[tuple[int, int]], config: PerceptionConfig):
+    seqs = [data.sequence(i) for i, _ in items]
+    images = np.stack([s.image(t) for s, (_, t) in zip(seqs, items, strict=True)])
+    masks = np.stack([s.masks[t] for s, (_, t) in zip(seqs, items, strict=True)])
+    poses = np.stack([s.poses[t] for s, (_, t) in zip(seqs, items, strict=True)])
+    held = np.array([s.held[t] for s, (_, t) in zip(seqs, items, strict=True)])
+    x = torch.from_numpy(images.transpose(0, 3, 1, 2).copy()).contiguous(memory_format=torch.channels_last)
+    return x, targets(masks, poses, held, config.sigma_px)
+
+
+def train(
+    data_dir: str | Path, config: PerceptionConfig, run_dir: str | Path, progress: bool = True
+) -> LoopState:
+    """Train into `run_dir`, resuming from its last checkpoint."""
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(config.seed)
+    rng = np.random.default_rng(config.seed)
+    data = Dataset(data_dir)
+    train_items = states_of(data, "train")
+    val_items = states_of(data, "val")
+    val_items = [
+        val_items[i] for i in np.linspace(0, len(val_items) - 1, min(VAL_IMAGES, len(val_items))).astype(int)
+    ]
+    val_batch = batch_of(data, val_items, config)
+    net = PerceptionNet(config).to(memory_format=torch.channels_last)
+    opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
+
+    class Batches:
+        def __iter__(self):
+            for _ in range(max(1, len(train_items) // config.batch)):
+                picks = rng.integers(0, len(train_items), config.batch)
+                yield batch_of(data, [train_items[i] for i in picks], config)
+
+    def train_step(batch):
+        images, t = batch
+        return loss(net(images), t)
+
+    def validate() -> dict[str, float]:
+        total, parts = loss(net(val_batch[0]), val_batch[1])
+        return {"loss": float(total), **parts}
+
+    loop = Loop(
+        kind=KIND,
+        config=config,
+        model=net,
+        optimizer=opt,
+        batches=Batches(),
+        train_step=train_step,
+        validate=validate,
+        lr_at=warmup_cosine(config.warmup, config.steps),
+    )
+    return run(loop, run_dir, progress)
+
+
+def load_perception(path: str | Path) -> PerceptionNet:
+    from afford.training.checkpoint import load_net_from_checkpoint
+
+    net, _, _ = load_net_from_checkpoint(path, KIND, PerceptionConfig, PerceptionNet)
+    return net.to(memory_format=torch.channels_last)

@@ -14,6 +14,7 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
+from afford.errors import UserError
 from afford.objects.perception import AXIS_PAIRS, OFFSET_SCALE, PerceptionNet
 from afford.objects.state import KINDS, N_SLOTS, POS_SCALE, SLOT_KIND, axes_quat, posture
 from afford.sim.camera import FOCAL_PX, SIZE
@@ -58,6 +59,10 @@ def pixel_world(pixel: np.ndarray, z: float) -> np.ndarray:
 @torch.no_grad()
 def perceive(net: PerceptionNet, images: np.ndarray) -> list[list[SeenObject]]:
     """The objects in each of (B, H, W, 4) RGBD images."""
+    if images.ndim != 4 or images.shape[1:] != (SIZE, SIZE, 4):
+        raise UserError(
+            f"perception takes {SIZE} x {SIZE} RGBD state images, not an array of shape {images.shape}"
+        )
     net.eval()
     found = []
     for i in range(0, len(images), BATCH):

@@ -57,11 +57,7 @@ def aligned_state(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray
 def measure_perception(
     net: PerceptionNet, data: Dataset, split: str | None, limit: int | None = None
 ) -> dict:
-    items = (
-        states_of(data, split)
-        if split
-        else [(i, t) for i in range(len(data)) for t in range(data.sequence(i).length + 1)]
-    )
+    items = states_of(data, split)
     if limit is not None and limit < len(items):
         items = [items[i] for i in np.linspace(0, len(items) - 1, limit).astype(int)]
     visible = found = spurious = kind_right = posture_n = posture_right = held_right = 0

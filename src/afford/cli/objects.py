@@ -40,23 +40,29 @@ def cmd_train_dynamics(args) -> int:
 
 
 def cmd_eval_dynamics(args) -> int:
-    from afford.objects.measure import measure, table
+    from afford.objects.measure import measure, net_predictor, simulator_predictor, table
     from afford.objects.train import load_dynamics
     from afford.objects.transitions import read_transitions
 
-    net = load_dynamics(args.weights)
+    if (args.weights is not None) == args.simulator:
+        raise CLIError("give one of --weights FILE (a dynamics net) and --simulator")
     split = None if args.split == "all" else args.split
     t = read_transitions(args.data, split, args.limit)
     if len(t) == 0:
         raise CLIError(f"{args.data}: no executions in the {args.split} split")
-    if net.config.arm_path and t.paths.size and (t.paths != t.paths).any():
-        raise CLIError(f"{args.data}: no arm paths recorded, and {args.weights} takes them as input")
+    if args.simulator:
+        predictor = simulator_predictor()
+    else:
+        net = load_dynamics(args.weights)
+        if net.config.arm_path and t.paths.size and (t.paths != t.paths).any():
+            raise CLIError(f"{args.data}: no arm paths recorded, and {args.weights} takes them as input")
+        predictor = net_predictor(net)
     before, seen_by = None, "true"
     if args.perception:
         before, seen_by = perceived_starts(args.perception, args.data, t), str(args.perception)
-    report = measure(net, t, before)
+    report = measure(predictor, t, before)
     report = {
-        "weights": str(args.weights),
+        "model": "simulator" if args.simulator else str(args.weights),
         "data": str(args.data),
         "split": args.split,
         "start": seen_by,
@@ -208,7 +214,13 @@ def add_eval_parser(esub) -> None:
         "shares within 3 px and 0.5 px, the best of the K outcomes; beside copying the start. Also the "
         "off-the-table F1 and the calibration of the outcomes' probabilities.",
     )
-    p.add_argument("--weights", required=True, metavar="FILE", help="a dynamics checkpoint or weights file")
+    p.add_argument("--weights", metavar="FILE", help="a dynamics checkpoint or weights file")
+    p.add_argument(
+        "--simulator",
+        action="store_true",
+        help="measure the simulator run from the start states instead of a net: with --perception, "
+        "the perceived-state simulator, which tells what perception costs",
+    )
     p.add_argument("--data", required=True, metavar="DIR")
     p.add_argument(
         "--split",

@@ -10,6 +10,7 @@ table but predicted gone. Objects that truly left the table are scored by the of
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,17 +53,35 @@ def pixel_error(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
     return np.where(gone, MISSING_PX, d)
 
 
-def predict_all(net: ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> Outcomes:
+# A world model's dynamics: (start poses, held slots, affordance rows, arm paths) -> Outcomes.
+Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], Outcomes]
+
+
+def net_predictor(net: ObjectDynamics) -> Predictor:
+    def run(before, held, actions, paths):
+        return predict(net, before, held, actions, paths if net.config.arm_path else None)
+
+    return run
+
+
+def simulator_predictor() -> Predictor:
+    """The simulator itself, run from the given start states (`simulated.py`)."""
+    from afford.objects.simulated import simulate
+    from afford.sim.scene import Scene
+
+    scene = Scene()
+    return lambda before, held, actions, paths: simulate(scene, before, held, actions)
+
+
+def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None = None) -> Outcomes:
     """Outcomes of every execution, from the true start states or from `before` (perceived)."""
     start = t.before if before is None else before
-    paths = t.paths if net.config.arm_path else None
     parts = [
-        predict(
-            net,
+        predictor(
             start[i : i + CHUNK],
             t.held_before[i : i + CHUNK],
             t.actions[i : i + CHUNK],
-            None if paths is None else paths[i : i + CHUNK],
+            t.paths[i : i + CHUNK],
         )
         for i in range(0, len(t), CHUNK)
     ]
@@ -71,9 +90,11 @@ def predict_all(net: ObjectDynamics, t: Transitions, before: np.ndarray | None =
     )
 
 
-def measure(net: ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
+def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
     """The dynamics report on the executions `t` (see the module's docstring)."""
-    outcomes = predict_all(net, t, before)
+    if isinstance(predictor, ObjectDynamics):
+        predictor = net_predictor(predictor)
+    outcomes = predict_all(predictor, t, before)
     likely, _ = outcomes.likeliest()
     effects = t.effects()
     errors = Errors()

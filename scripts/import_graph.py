@@ -20,7 +20,7 @@ SRC = Path(__file__).resolve().parent.parent / "src"
 LAYERS = (
     ("afford", "afford.sim"),
     ("afford.data", "afford.training", "afford.viz"),
-    ("afford.recognition", "afford.prediction", "afford.words", "afford.shipped"),
+    ("afford.recognition", "afford.prediction", "afford.words", "afford.objects", "afford.shipped"),
     ("afford.planning",),
     ("afford.cli",),
 )

@@ -22,6 +22,17 @@ AGREEMENT_FILE = "agreement.safetensors"  # goal sentences (words/), beside the 
 # A prediction net trained on continuous turns (paper V) for `--optimise-turns`, with the shipped
 # recognition net: shipped apart because training on them cost the main net quarter-turn tasks.
 CONTINUOUS = WEIGHTS / "continuous"
+# The object world model's nets (afford.objects): perception (E) and dynamics (P^a).
+OBJECTS = WEIGHTS / "objects"
+PERCEPTION_FILE = "perception.safetensors"
+DYNAMICS_FILE = "dynamics.safetensors"
+
+
+def load_object_perception(weights: str | Path | None = None):
+    """The object perception net from a weights folder (default: the shipped one)."""
+    from afford.objects.perception_train import load_perception
+
+    return load_perception(Path(weights or OBJECTS) / PERCEPTION_FILE)
 
 
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:

@@ -13,7 +13,6 @@ import numpy as np
 
 from afford.objects.dynamics import Outcomes
 from afford.objects.state import KINDS, N_SLOTS, SLOT_KIND
-from afford.planning.oracle import OracleModel
 from afford.sim.affordance import decode_affordance
 from afford.sim.scene import ObjectSpec, Scene
 
@@ -62,16 +61,3 @@ def simulate(scene: Scene, before: np.ndarray, held: np.ndarray, actions: np.nda
             inverse = {row: s for s, row in named.items()}
             held_next[i] = inverse.get(slots.index(scene.held), -1) if scene.held else -1
     return Outcomes(poses[:, None], held_next[:, None], np.ones((len(actions), 1)))
-
-
-class PerceivedSimModel(OracleModel):
-    """The planner's world model (`--planner perceived-sim`): the oracle's search over a scene
-    built from what the perception net sees in the start image."""
-
-    def __init__(self, image: np.ndarray, perception) -> None:
-        from afford.objects.perceive import perceive, to_state
-
-        poses, held = to_state(perceive(perception, image[None])[0])
-        scene = Scene()
-        scene_from_state(scene, poses, held)
-        super().__init__(scene)

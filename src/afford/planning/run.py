@@ -113,6 +113,30 @@ def _oracle_search(task: Task, scene: Scene, config: PlannerConfig, learned, ste
     return search(OracleModel(scene), task.goal, steps, config.search)
 
 
+_SIMULATOR: list[Scene] = []  # the second simulator the perceived-sim planner builds its states in
+
+
+def _perceived_sim_search(
+    task: Task, scene: Scene, config: PlannerConfig, learned, steps: int
+) -> SearchResult:
+    """The oracle's search over a simulator scene built from the objects perceived in what the
+    camera sees now (objects/simulated.py): what planning loses to perception alone."""
+    from afford.planning.perceived_sim import PerceivedSimModel
+    from afford.shipped import load_object_perception
+
+    if not _SIMULATOR:
+        _SIMULATOR.append(Scene())
+    model = PerceivedSimModel(scene.observe(), load_object_perception(), _SIMULATOR[0])
+    return search(model, task.goal, steps, config.search)
+
+
+def _perceived_sim(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    scene.reset(task.scene)
+    return _judge(
+        task, "perceived-sim", _perceived_sim_search(task, scene, config, None, task.max_steps), scene
+    )
+
+
 def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     scene.reset(task.scene)
     result = _ensemble_search(task, scene, config, _nets(learned), task.max_steps)
@@ -379,6 +403,7 @@ PLANNER_REGISTRY = {
     "hybrid": _hybrid,  # canonical proposals checked by the learned nets (paper V)
     "hybrid-oracle": _hybrid_oracle,  # the same, checked by the simulator
     "ensemble": _ensemble,  # the learned planner on an ensemble of prediction nets, risk-averse (paper V)
+    "perceived-sim": _perceived_sim,  # the simulator run from perceived objects (objects/simulated.py)
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
 # Each planner that can plan again from an observed state: (task, scene, config, learned nets
@@ -389,5 +414,6 @@ CLOSED_LOOP = {
     "hybrid": _hybrid_rounds,
     "hybrid-oracle": _hybrid_rounds,
     "ensemble": _searcher(_ensemble_search),
+    "perceived-sim": _searcher(_perceived_sim_search),
 }
 USES_NETS = ("learned", "hybrid", "ensemble")  # the planners that load the trained nets

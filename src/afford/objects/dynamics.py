@@ -46,12 +46,12 @@ CM = 100.0  # positions change in centimetres at the nets' outputs
 
 @dataclass
 class DynamicsConfig:
-    hidden: int = 128
+    hidden: int = 96
     rounds: int = 2  # message-passing rounds
     outcomes: int = 2  # K: where one start can go two ways
     arm_path: bool = False  # the arm's key points as an input
     # training
-    steps: int = 6000
+    steps: int = 4000
     batch: int = 256
     lr: float = 1e-3
     warmup: int = 200
@@ -80,19 +80,24 @@ def _mlp(n_in: int, hidden: int, n_out: int) -> nn.Sequential:
 
 
 class Relations(nn.Module):
-    """One round of messages: every object hears every other present object."""
+    """One round of messages: every object hears every other present object.
+
+    The message MLP's first layer is linear in [h_i, h_j, pair], so it is applied to each node
+    once and summed over pairs: S nodes cost S products, not S x S."""
 
     def __init__(self, hidden: int):
         super().__init__()
-        self.edge = _mlp(2 * hidden + PAIR, hidden, hidden)
+        self.sender = nn.Linear(hidden, hidden)
+        self.receiver = nn.Linear(hidden, hidden, bias=False)
+        self.relation = nn.Linear(PAIR, hidden, bias=False)
+        self.message = nn.Sequential(nn.SiLU(), nn.Linear(hidden, hidden))
         self.node = _mlp(2 * hidden, hidden, hidden)
 
     def forward(self, h: torch.Tensor, pair: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-        b, s, d = h.shape
-        hi = h[:, :, None].expand(b, s, s, d)
-        hj = h[:, None].expand(b, s, s, d)
+        s = h.shape[1]
+        first = self.receiver(h)[:, :, None] + self.sender(h)[:, None] + self.relation(pair)
         others = mask[:, None, :] & ~torch.eye(s, dtype=torch.bool, device=h.device)
-        m = self.edge(torch.cat([hi, hj, pair], -1)) * others[..., None]
+        m = self.message(first) * others[..., None]
         return h + self.node(torch.cat([h, m.sum(2)], -1))
 
 

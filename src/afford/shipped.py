@@ -35,6 +35,13 @@ def load_object_perception(weights: str | Path | None = None):
     return load_perception(Path(weights or OBJECTS) / PERCEPTION_FILE)
 
 
+def load_object_dynamics(weights: str | Path | None = None):
+    """The object dynamics net (P^a over objects) from a weights folder (default: the shipped one)."""
+    from afford.objects.train import load_dynamics
+
+    return load_dynamics(Path(weights or OBJECTS) / DYNAMICS_FILE)
+
+
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
     """The recognition and prediction checkpoints in a folder (default: the shipped ones).
 

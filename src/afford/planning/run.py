@@ -130,6 +130,29 @@ def _perceived_sim_search(
     return search(model, task.goal, steps, config.search)
 
 
+_DRAWER: list = []  # the simulator the objects planner draws its states with
+
+
+def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
+    """The paper's search with the object world model: objects perceived, moved and drawn."""
+    from afford.objects.draw import Drawer
+    from afford.planning.objects_model import ObjectsModel
+    from afford.shipped import load_object_dynamics, load_object_perception
+
+    if not _DRAWER:
+        _DRAWER.append(Drawer())
+    nets = _nets(learned)
+    model = ObjectsModel(
+        scene.observe(), nets.recognizer, load_object_perception(), load_object_dynamics(), _DRAWER[0]
+    )
+    return search(model, task.goal, steps, config.search)
+
+
+def _objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    scene.reset(task.scene)
+    return _judge(task, "objects", _objects_search(task, scene, config, learned, task.max_steps), scene)
+
+
 def _perceived_sim(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     scene.reset(task.scene)
     return _judge(
@@ -404,6 +427,7 @@ PLANNER_REGISTRY = {
     "hybrid-oracle": _hybrid_oracle,  # the same, checked by the simulator
     "ensemble": _ensemble,  # the learned planner on an ensemble of prediction nets, risk-averse (paper V)
     "perceived-sim": _perceived_sim,  # the simulator run from perceived objects (objects/simulated.py)
+    "objects": _objects,  # the object world model: objects perceived, moved by learned dynamics, drawn
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
 # Each planner that can plan again from an observed state: (task, scene, config, learned nets
@@ -415,5 +439,6 @@ CLOSED_LOOP = {
     "hybrid-oracle": _hybrid_rounds,
     "ensemble": _searcher(_ensemble_search),
     "perceived-sim": _searcher(_perceived_sim_search),
+    "objects": _searcher(_objects_search),
 }
-USES_NETS = ("learned", "hybrid", "ensemble")  # the planners that load the trained nets
+USES_NETS = ("learned", "hybrid", "ensemble", "objects")  # the planners that load the trained nets

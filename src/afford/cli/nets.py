@@ -86,6 +86,18 @@ def cmd_eval(args) -> int:
         else:
             _check_run(args.run)
             result, folder = evaluate(args.run, args.data, checkpoint=args.checkpoint), Path(args.run)
+    elif args.objects is not None:
+        from afford.objects.rollout import ObjectRollout
+        from afford.prediction.evaluate import evaluate_world, format_table
+        from afford.shipped import OBJECTS, load_object_dynamics, load_object_perception
+
+        source = OBJECTS if args.objects == "shipped" else Path(args.objects)
+        world = ObjectRollout(load_object_perception(source), load_object_dynamics(source))
+        folder = Path(args.out)
+        recognizer = None if args.no_futures else load_nets(args.recognition).recognizer
+        result = evaluate_world(
+            world, f"objects ({source})", args.data, folder / EVALS[args.net][1], recognizer
+        )
     else:
         from afford.prediction.evaluate import evaluate, format_table
 
@@ -303,6 +315,14 @@ def add_parsers(sub) -> None:
         help="weights folder whose recognition net runs on the predicted states (default: the shipped one)",
     )
     p.add_argument("--no-futures", action="store_true", help="skip recognition on the predicted states")
+    p.add_argument(
+        "--objects",
+        nargs="?",
+        const="shipped",
+        metavar="DIR",
+        help="evaluate the object world model (perception.safetensors and dynamics.safetensors in DIR; "
+        "without DIR the shipped ones) instead of a prediction net, on the same measures",
+    )
     f = esub.add_parser(
         "futures",
         help="recognition on predicted states",

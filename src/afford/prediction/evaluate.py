@@ -106,6 +106,26 @@ def table(errs: dict[str, np.ndarray]) -> dict:
     return out
 
 
+def evaluate_world(
+    world, name: str, data_dir: str | Path, pictures: Path | None = None, recognizer=None
+) -> dict:
+    """Table 2, foresight, recognition on predicted states and Fig. 7-style pictures for any
+    world model with a prediction net's `rollout` (e.g. objects/rollout.py's), as for a net."""
+    data = Dataset(data_dir)
+    result: dict = {"world_model": name}
+    for split, limit in (("test", None), ("train", TRAIN_SEQUENCES)):
+        result[split] = table(errors(world, data, split, limit)[0])
+        result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
+    result["foresight"] = foresight.measure(world.rollout, data, "test").as_dict()
+    if recognizer is not None:
+        from afford.prediction.futures import future_recall, net_predictor
+
+        result["future_recall"] = future_recall(net_predictor(world), recognizer, data, "test")
+    if pictures is not None:
+        result["pictures"] = event_pictures(world, data, pictures)
+    return result
+
+
 def evaluate(
     checkpoint: str | Path, data_dir: str | Path, pictures: Path | None = None, recognizer=None
 ) -> dict:
@@ -201,7 +221,10 @@ def format_table(result: dict) -> str:
     def cell(s: dict) -> str:
         return "-" if s["mean"] is None else f"{s['mean']:.4f} ({s['sd']:.4f})"
 
-    lines = [f"{result['architecture']} net, pixel input: {'yes' if result['pixel_input'] else 'no'}", ""]
+    if "world_model" in result:
+        lines = [f"world model: {result['world_model']}", ""]
+    else:
+        lines = [f"{result['architecture']} net, pixel input: {'yes' if result['pixel_input'] else 'no'}", ""]
     names = {
         "all_area": "all area",
         "changed_area": f"changed > {CHANGED}",

@@ -61,6 +61,8 @@ def cmd_eval_dynamics(args) -> int:
     if args.perception:
         before, seen_by = perceived_starts(args.perception, args.data, t), str(args.perception)
     report = measure(predictor, t, before)
+    if args.pictures:
+        report["pictures"] = dynamics_pictures(predictor, t, before, args.pictures)
     report = {
         "model": "simulator" if args.simulator else str(args.weights),
         "data": str(args.data),
@@ -73,6 +75,31 @@ def cmd_eval_dynamics(args) -> int:
         Path(args.out).write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else table(report))
     return 0
+
+
+def dynamics_pictures(predictor, t, before, out: str, count: int = 8) -> str:
+    """Executions with side effects, each drawn from its true start: where objects were
+    (white), went (green) and were predicted (red)."""
+    import numpy as np
+
+    from afford.objects.draw import Drawer
+    from afford.objects.picture import grid, moved
+
+    rows = [i for i, step in enumerate(t.effects()) if not step.canonical]
+    rows = [rows[int(j)] for j in np.linspace(0, len(rows) - 1, min(count, len(rows)))] if rows else []
+    if not rows:
+        return "none: no execution with a side effect"
+    start = t.before if before is None else before
+    sub = t.subset(np.array(rows))
+    poses, _ = predictor(start[rows], sub.held_before, sub.actions, sub.paths).likeliest()
+    drawer = Drawer()
+    pictures = [
+        moved(drawer.render(sub.before[i], int(sub.held_before[i])), sub.before[i], sub.after[i], poses[i])
+        for i in range(len(rows))
+    ]
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    grid(pictures, 4).save(out)
+    return out
 
 
 def perceived_starts(perception: str, data_dir: str, t):
@@ -138,17 +165,36 @@ def cmd_eval_objects(args) -> int:
 
     net = load_perception(args.weights)
     split = None if args.split == "all" else args.split
+    data = Dataset(args.data)
     report = {
         "weights": str(args.weights),
         "data": str(args.data),
         "split": args.split,
-        **measure_perception(net, Dataset(args.data), split, args.limit),
+        **measure_perception(net, data, split, args.limit),
     }
+    if args.pictures:
+        report["pictures"] = perception_pictures(net, data, split, args.pictures)
     if args.out:
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         Path(args.out).write_text(json.dumps(report, indent=2) + "\n")
     print(json.dumps(report, indent=2) if args.json else perception_table(report))
     return 0
+
+
+def perception_pictures(net, data, split: str | None, out: str, count: int = 8) -> str:
+    """What perception sees in `count` images of the split, evenly spread."""
+    import numpy as np
+
+    from afford.objects.perceive import perceive
+    from afford.objects.perception_train import states_of
+    from afford.objects.picture import grid, perceived
+
+    items = states_of(data, split)
+    items = [items[int(j)] for j in np.linspace(0, len(items) - 1, min(count, len(items)))]
+    images = np.stack([data.sequence(i).image(k) for i, k in items])
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    grid([perceived(im, objs) for im, objs in zip(images, perceive(net, images), strict=True)], 4).save(out)
+    return out
 
 
 def add_train_parser(tsub) -> None:
@@ -236,6 +282,7 @@ def add_eval_parser(esub) -> None:
         help="start from the states this perception net sees in the start images (the dataset needs "
         "images and masks) instead of the true states",
     )
+    p.add_argument("--pictures", metavar="FILE.png", help="draw 8 executions with side effects here")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_eval_dynamics)
 
@@ -253,5 +300,6 @@ def add_eval_parser(esub) -> None:
     q.add_argument("--split", choices=("train", "val", "test", "all"), default="test")
     q.add_argument("--limit", type=int, metavar="N", help="at most N images, evenly spread")
     q.add_argument("--out", metavar="FILE.json", help="also write the report here")
+    q.add_argument("--pictures", metavar="FILE.png", help="draw what perception sees in 8 images here")
     q.add_argument("--json", action="store_true")
     q.set_defaults(func=cmd_eval_objects)

@@ -2,18 +2,20 @@
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-TORCH  := 2.13.0
+# The one place versions are pinned; torch's pin is read from it for the CPU build below.
+PINS   := constraints.txt
+TORCH  := $(shell sed -n 's/^torch==//p' $(PINS))
 export MUJOCO_GL ?= egl
 
 .PHONY: install demo test lint bench clean
 
-$(STAMP): pyproject.toml scripts/setup_system.sh
+$(STAMP): pyproject.toml $(PINS) scripts/setup_system.sh
 	bash scripts/setup_system.sh
 	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	# The CPU build of torch first: a plain resolve may pick a GPU build with gigabytes of CUDA wheels.
 	$(PY) -m pip install -q "torch==$(TORCH)" || $(PY) -m pip install -q "torch==$(TORCH)+cpu"
-	$(PY) -m pip install -q -e '.[dev]'
+	$(PY) -m pip install -q -c $(PINS) -e '.[dev]'
 	touch $(STAMP)
 
 install: $(STAMP)
@@ -21,7 +23,7 @@ install: $(STAMP)
 # Ray, for the tests of `afford generate --ray`; the core install and the demo do without it.
 CLUSTER := $(VENV)/.cluster
 $(CLUSTER): $(STAMP)
-	$(PY) -m pip install -q -e '.[dev,cluster]'
+	$(PY) -m pip install -q -c $(PINS) -e '.[dev,cluster]'
 	touch $(CLUSTER)
 
 # The learned planner (paper II.D) with the weights shipped in the package: no training step.

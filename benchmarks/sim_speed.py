@@ -2,7 +2,7 @@
 
 Run: python benchmarks/sim_speed.py [--scenes N] [--json]
 Executions are random ground-truth affordances in random scenes, settle included (the
-target in issue 2 is at least 10 executions/s per core).
+target is at least 10 executions/s per core).
 """
 
 from __future__ import annotations

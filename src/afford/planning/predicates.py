@@ -1,18 +1,8 @@
 """Success predicates: what a task's goal means, stated on true object poses.
 
 The planner never sees these (it sees only the goal image); they judge whether an executed
-plan did what the task asked. A predicate is a small JSON tree:
-
-    {"near": {"object": "cup0", "to": [x, y, z], "radius": 0.03}}   centre within radius (m)
-    {"near": {..., "xy": true}}                                      ... ignoring height
-    {"yaw": {"object": "block0", "to": 90, "tolerance": 15, "period": 180}}
-    {"on": {"object": "cup0", "host": "block0"}}     resting on the host's top ("table" too)
-    {"upright": "cup0"}                              its axis within ~25 degrees of vertical
-    {"gone": "ball0"}                                fell off the table
-    {"hidden": "ball0"}                              gone, or at most `HIDDEN_PIXELS` visible
-    {"inside": {"object": "ball0", "box": [x0, y0, x1, y1]}}   centre inside a table area
-    {"held": "cup0"}
-    {"all": [...]}, {"any": [...]}, {"not": {...}}
+plan did what the task asked. A predicate is a small JSON tree; its forms, and when each
+holds, are written once in `planning/task_schema.PREDICATES` (a test checks they match `_EVAL`).
 
 Objects are named by kind and order of appearance in the task's scene: cup0, cup1, ball0,
 support0, block0.

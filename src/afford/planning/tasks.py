@@ -1,26 +1,10 @@
 """Task files: a planning problem as a user writes it (JSON).
 
-    {
-      "format": 1,
-      "name": "order",
-      "challenge": "what makes this task hard, in a sentence or two",
-      "scene": {"objects": [{"kind": "cup", "pos": [x, y, z], "yaw": 0}, ...]},
-      "goal": {"text": "the cup is on the block and the ball is gone"}   a sentence (paper V), or
-      "goal": {
-        "type": "positive" | "negative",
-        "channels": "rgbd" | "rgb",          (default: rgbd for positive, rgb for negative)
-        "image": "goal.png" | "goal.npy",     a patch, path relative to the task file; or
-        "scene": {"objects": [...]},          a goal scene the tool renders and crops, with
-        "crop": [col, row, width, height]     a pixel box, or
-        "crop": {"centre": [x, y, z], "size": [width, height]}   a box around a world point
-      },
-      "max_steps": 4,
-      "success": {predicate, see afford.planning.predicates}
-    }
-
-A PNG goal is RGB, or RGBA with depth (in [0, 1], near = 0) in the alpha channel; a .npy goal
-is a float (h, w, 3|4) array in [0, 1]. The paper drops depth for negative goals so that
-lifting an object does not count as removing it (IV.C): "channels": "rgb" does that.
+The fields, their types and their meaning are written once, in `planning/task_schema.py`
+(docs/tasks.md shows them as tables). A PNG goal is RGB, or RGBA with depth (in [0, 1], near =
+0) in the alpha channel; a .npy goal is a float (h, w, 3|4) array in [0, 1]. The paper drops
+depth for negative goals so that lifting an object does not count as removing it (IV.C):
+"channels": "rgb" does that.
 """
 
 from __future__ import annotations
@@ -35,6 +19,7 @@ from afford.errors import UserError
 from afford.planning.goal import CHANNELS, Goal, GoalError
 from afford.planning.predicates import Predicate, PredicateError, parse
 from afford.planning.sentence_goal import SentenceGoal, StatementHolds
+from afford.planning.task_schema import TASK_FIELDS, fields_under
 from afford.sim import camera as cam
 from afford.sim.scene import SceneError, read_json_file, specs_from_json
 from afford.words.facts import State
@@ -43,6 +28,7 @@ from afford.words.sentences import parse as parse_sentence
 
 TASK_FORMAT = 1
 MAX_STEPS_LIMIT = 8
+REQUIRED = tuple(f.path for f in TASK_FIELDS if f.required == "yes")
 
 
 class TaskError(UserError):
@@ -93,11 +79,11 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
         raise TaskError(
             f"{where}.format: unknown task format {obj.get('format')!r} (this reads {TASK_FORMAT})"
         )
-    known = {"format", "name", "challenge", "scene", "goal", "max_steps", "success"}
+    known = fields_under()
     unknown = set(obj) - known
     if unknown:
         raise TaskError(f"{where}: unknown field {sorted(unknown)[0]!r}; expected {sorted(known)}")
-    for key in ("scene", "goal", "max_steps", "success"):
+    for key in REQUIRED:
         if key not in obj:
             raise TaskError(f"{where}: missing field {key!r}")
     specs = specs_from_json(obj["scene"], "scene")
@@ -159,7 +145,7 @@ def sentence_task(scene_path: str | Path, text: str, max_steps: int, scene=None)
 def _goal(g: object, base: Path, scene) -> tuple[Goal, list | None, tuple | None]:
     if not isinstance(g, dict):
         raise TaskError("goal: expected an object with 'type' and 'image' or 'scene' + 'crop'")
-    known = {"type", "channels", "image", "scene", "crop"}
+    known = fields_under("goal")
     unknown = set(g) - known
     if unknown:
         raise TaskError(f"goal: unknown field {sorted(unknown)[0]!r}; expected {sorted(known)}")

@@ -65,8 +65,8 @@ class PredictionConfig:
     angle_flip: bool = True
     position_noise: float = 0.002
     angle_noise: float = 1.0
-    # Gradients rescaled to at most this norm before each step (0: off, as the nets shipped before
-    # the seventh session were trained; the one shipped since used 1.0). A from-scratch two-outcome
+    # Gradients rescaled to at most this norm before each step (0: off; the shipped prediction net
+    # was trained with 1.0). A from-scratch two-outcome
     # run (fork=latent) met one batch of loss 1.3e6 at step 300 (the choice head's cross-entropy
     # on an unbounded dc): the gradient filled Adam's second moments, and the net learned at a
     # fraction of its rate for the rest of the run (val error 3x the one-outcome run's).

@@ -4,7 +4,7 @@ A two-outcome net (`hypotheses_by=effect`: a canonical outcome, a side-effect ou
 head that says how likely the second is) trained with the side-effect term (`loss_effect`)
 draws side effects far better than one trained without it, and canonical effects worse: the
 term's gradients reach the layers both outcomes share, so the planner loses canonical tasks
-(docs/results.md, issue 26's runs). A pair keeps them apart without a compromise in either:
+(docs/experiments/landings.md). A pair keeps them apart without a compromise in either:
 `main`, the net trained for the canonical outcome, draws it and its head says how likely the
 side effect is; `side`, the net trained with the term, draws the side effect. Neither net's
 weights touch the other's.

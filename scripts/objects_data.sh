@@ -11,4 +11,4 @@ A=${AFFORD:-.venv/bin/afford}
 $A generate --out data/poses --sequences 6000 --seed 100 --poses-only "$@"
 $A generate --out data/objects-test --sequences 1000 --seed 200 --masks "$@"
 $A generate --out data/objects-train --sequences 2000 --seed 201 --masks "$@"
-$A generate --out data/poses-effects --sequences 2000 --seed 101 --poses-only --actions effects "$@"
+$A generate --out data/poses-effects --sequences 1200 --seed 101 --poses-only --actions effects "$@"

@@ -63,6 +63,7 @@ class DynamicsConfig:
     input_noise: float = 0.0  # metres of Gaussian noise on input positions (robust to perception)
     mirror: bool = False  # also learn each execution mirrored across the table's centre line
     spread: float = 0.05  # share of the loss every outcome takes, so none is left untrained
+    rare_weight: float = 1.0  # weight of an object that moves or leaves the table in the gate's loss
     moved: float = 0.002  # metres: an object that moved less than this counts as still
     turned_deg: float = 3.0  # ... and whose axes turned less than this
 
@@ -258,16 +259,21 @@ def encode_targets(
 
 
 # ---------------------------------------------------------------------------- loss
-def outcome_losses(out: dict[str, torch.Tensor], target: dict[str, torch.Tensor]) -> torch.Tensor:
+def outcome_losses(
+    out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], rare_weight: float = 1.0
+) -> torch.Tensor:
     """(B, K) each outcome's loss on each execution: the gate, gone and held as classifications
-    over the objects on the table, and where each object that moves lands."""
+    over the objects on the table (an object that moves or leaves the table weighs
+    `rare_weight`: most objects stay), and where each object that moves lands."""
     was = target["was"][..., None]
-    bce = lambda logit, y: F.binary_cross_entropy_with_logits(  # noqa: E731
-        logit, y[..., None].expand_as(logit), reduction="none"
-    )
+
+    def bce(logit: torch.Tensor, y: torch.Tensor, weight: float = 1.0) -> torch.Tensor:
+        y = y[..., None].expand_as(logit)
+        return F.binary_cross_entropy_with_logits(logit, y, reduction="none") * (1 + (weight - 1) * y)
+
     cls = (
-        bce(out["moves"], target["moves"])
-        + bce(out["gone"], target["gone"])
+        bce(out["moves"], target["moves"], rare_weight)
+        + bce(out["gone"], target["gone"], rare_weight)
         + bce(out["held"], target["held"])
     ) * was
     lands = target["lands"][..., None]
@@ -284,11 +290,11 @@ def outcome_losses(out: dict[str, torch.Tensor], target: dict[str, torch.Tensor]
 
 
 def mixture_loss(
-    out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], spread: float
+    out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], spread: float, rare_weight: float = 1.0
 ) -> tuple[torch.Tensor, dict]:
     """Winner takes all over the K outcomes (each execution trains the outcome nearest to what
     happened, plus a small share to every outcome), and the outcome head learns which wins."""
-    per = outcome_losses(out, target)
+    per = outcome_losses(out, target, rare_weight)
     best = per.detach().argmin(1)
     wta = per.gather(1, best[:, None]).squeeze(1)
     choice = F.cross_entropy(out["outcome"], best)

@@ -85,10 +85,10 @@ def train(
 
     def train_step(batch):
         inputs, targets = batch
-        return mixture_loss(net(inputs), targets, config.spread)
+        return mixture_loss(net(inputs), targets, config.spread, config.rare_weight)
 
     def validate() -> dict[str, float]:
-        loss, parts = mixture_loss(net(val_batch[0]), val_batch[1], config.spread)
+        loss, parts = mixture_loss(net(val_batch[0]), val_batch[1], config.spread, config.rare_weight)
         return {"loss": float(loss), **parts}
 
     loop = Loop(

@@ -126,10 +126,12 @@ def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.nd
                 errors.model[g].append(model)
                 errors.best[g].append(best)
                 errors.copy[g].append(copy)
-        # Calibration: is outcome k right about every object that moves in it or in truth?
-        for k in range(outcomes.poses.shape[1]):
-            correct.append(_outcome_right(t.before[i], t.after[i], outcomes.poses[i, k]))
-            prob.append(float(outcomes.probability[i, k]))
+        # Calibration: how often each outcome is the one nearest to what happened.
+        # Where every outcome is the same prediction, which one the head picks does not matter.
+        credit = _nearest(t.after[i], outcomes.poses[i], ~np.isnan(t.before[i, :, 0]))
+        if credit.min() < credit.max():
+            correct += list(credit)
+            prob += list(outcomes.probability[i])
     return {
         "executions": len(t),
         "groups": {g: _summary(errors, g) for g in GROUPS if errors.model[g]},
@@ -138,14 +140,22 @@ def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.nd
     }
 
 
-def _outcome_right(before: np.ndarray, after: np.ndarray, pred: np.ndarray) -> bool:
-    was = ~np.isnan(before[:, 0])
-    if not np.array_equal(np.isnan(after[:, 0]) & was, np.isnan(pred[:, 0]) & was):
-        return False
-    moved_true = was & ~np.isnan(after[:, 0]) & (pixel_error(before, after) > 1.0)
-    moved_pred = was & ~np.isnan(pred[:, 0]) & (pixel_error(before, pred) > 1.0)
-    check = (moved_true | moved_pred) & ~np.isnan(after[:, 0])
-    return bool(np.all(pixel_error(pred[check], after[check]) < NEAR_PX))
+def _nearest(after: np.ndarray, poses: np.ndarray, was: np.ndarray, tie_px: float = 0.5) -> np.ndarray:
+    """(K,) each outcome's share in being the one nearest the truth: its error summed over the
+    objects on the table before (each capped at NEAR_PX * 10; an object gone in one and not the
+    other costs the cap), one for the nearest, shared evenly among outcomes within `tie_px`."""
+    cap = NEAR_PX * 10
+    gone = np.isnan(after[:, 0])
+    cost = []
+    for pred in poses:
+        pred_gone = np.isnan(pred[:, 0])
+        err = np.where(gone | pred_gone, np.where(gone == pred_gone, 0.0, cap), 0.0)
+        both = ~gone & ~pred_gone & was
+        err[both] = np.minimum(pixel_error(pred[both], after[both]), cap)
+        cost.append(float(err[was].sum()))
+    cost = np.array(cost)
+    best = cost <= cost.min() + tie_px
+    return best / best.sum()
 
 
 def _summary(errors: Errors, g: str) -> dict:
@@ -174,8 +184,8 @@ def _f1(truth: np.ndarray, pred: np.ndarray) -> dict:
 
 
 def _calibration(prob: np.ndarray, correct: np.ndarray, bins: int = 10, least: int = 20) -> dict:
-    """Per decile of predicted probability, the share of outcomes that were right; the largest
-    gap over deciles holding at least `least` outcomes."""
+    """Per decile of predicted probability, the share of outcomes that were the nearest to what
+    happened (`_nearest`); the largest gap over deciles holding at least `least` outcomes."""
     edges = np.linspace(0, 1, bins + 1)
     rows = []
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
@@ -187,11 +197,11 @@ def _calibration(prob: np.ndarray, correct: np.ndarray, bins: int = 10, least: i
                     "to": hi,
                     "n": int(inside.sum()),
                     "mean_p": float(prob[inside].mean()),
-                    "share_right": float(correct[inside].mean()),
+                    "share_nearest": float(correct[inside].mean()),
                 }
             )
-    gaps = [abs(r["mean_p"] - r["share_right"]) for r in rows if r["n"] >= least]
-    return {"deciles": rows, "largest_gap": max(gaps) if gaps else None}
+    gaps = [abs(r["mean_p"] - r["share_nearest"]) for r in rows if r["n"] >= least]
+    return {"deciles": rows, "largest_gap": max(gaps) if gaps else None, "outcomes": len(prob)}
 
 
 def table(report: dict) -> str:

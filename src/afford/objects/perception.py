@@ -151,6 +151,9 @@ def targets(
             seg[i][where] = kind + 1
             d2 = (px[0] - centre[0]) ** 2 + (px[1] - centre[1]) ** 2
             heat[i, kind] = np.maximum(heat[i, kind], np.exp(-d2 / (2 * sigma_px**2)))
+            # The pixel holding the centre is the peak, whatever fraction of a pixel it is off.
+            col, row = np.clip(np.floor(centre).astype(int), 0, SIZE - 1)
+            heat[i, kind, row, col] = 1.0
             offset[i][:, where] = (centre[:, None] - px[:, where]) / OFFSET_SCALE
             z[i, 0][where] = poses[i, slot, 2] * POS_SCALE
             u, a = quat_axes(poses[i, slot, 3:7].astype(float))

@@ -215,3 +215,22 @@ def test_the_simulator_from_true_objects_gives_the_recorded_next_state(pose_data
     # canonical steps land where they did; a side effect may differ a little (a scene rebuilt
     # from float32 poses, at rest, is not bit for bit the recorded one)
     assert np.median(err) < 0.05 and np.mean(err < 1.0) > 0.9
+
+
+def test_a_shard_without_masks_in_a_masked_dataset_is_made_again(tmp_path):
+    from dataclasses import replace
+
+    from afford.data.format import read_shard, shard_path, write_shard
+
+    root = tmp_path / "m"
+    config = GenerateConfig(sequences=2, seed=3, workers=1, shard_size=1, masks=True)
+    generate(root, config, progress=False)
+    data = Dataset(root)
+    assert data.sequence(0).masks.shape == (data.sequence(0).length + 1, 128, 128)
+    path = shard_path(root, 0)
+    write_shard(path, [replace(s, masks=None) for s in read_shard(path, data.slots)])
+    with pytest.raises(DataError, match="no instance masks"):
+        Dataset(root).sequence(0)
+    report = generate(root, config, progress=False)
+    assert len(report.remade) == 1 and "no instance masks" in report.remade[0]
+    assert Dataset(root).sequence(0).masks is not None

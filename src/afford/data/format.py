@@ -300,6 +300,11 @@ class Dataset:
             expected = list(self.manifest.shard_range(k))
             if [s.index for s in seqs] != expected:
                 raise DataError(f"{shard_path(self.root, k)}: corrupt shard (holds the wrong sequences)")
+            if self.manifest.generator.get("masks", False) and any(s.masks is None for s in seqs):
+                raise DataError(
+                    f"{shard_path(self.root, k)}: corrupt shard (no instance masks in a dataset made with "
+                    "--masks); re-run the same `afford generate` to make it again"
+                )
             self._cache[k] = seqs
         return self._cache[k]
 
@@ -339,12 +344,15 @@ def check_shard(root: Path, manifest: Manifest, k: int) -> str | None:
                 return f"{path}: corrupt shard (checksum of {bad} fails)"
         with np.load(path, allow_pickle=False) as a:
             index = a["index"]
+            lacks_masks = manifest.generator.get("masks", False) and "masks" not in a.files
     except FileNotFoundError:
         return f"{path}: shard missing"
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
         return f"{path}: corrupt shard ({type(e).__name__}: {e})"
     if index.tolist() != list(manifest.shard_range(k)):
         return f"{path}: corrupt shard (holds the wrong sequences)"
+    if lacks_masks:  # written by a generator that did not keep them
+        return f"{path}: corrupt shard (no instance masks in a dataset made with --masks)"
     return None
 
 

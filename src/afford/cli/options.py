@@ -5,8 +5,8 @@ from __future__ import annotations
 from afford.cli.errors import CLIError
 
 PLANNERS_HELP = (
-    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble), several as a comma list, "
-    "or all"
+    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble, perceived-sim, objects), "
+    "several as a comma list, or all"
 )
 MAX_NODES_HELP = (
     "refuse to grow a tree past this many states, with the estimate, before growing the depth that "

@@ -29,6 +29,7 @@ from afford.sim.camera import SIZE, world_to_pixel
 # Output channels, in order.
 HEADS = {"seg": 1 + len(KINDS), "heat": len(KINDS), "offset": 2, "z": 1, "up": 3, "along": 6, "held": 1}
 OFFSET_SCALE = 10.0  # offsets leave the net in tens of pixels
+SEG_WEIGHT = torch.tensor([1.0] + [4.0] * len(KINDS))  # none, then each kind
 AXIS_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the along product's entries
 
 
@@ -105,6 +106,10 @@ class PerceptionNet(nn.Module):
         # itself beside the features, puts masks' edges and centres on the right pixel.
         self.refine = ConvBNReLU(w + 6, w // 2, 3)
         self.head = nn.Conv2d(w // 2, sum(HEADS.values()), 1)
+        with torch.no_grad():  # centre maps start near 0, as they mostly are (CenterNet's prior)
+            heat = list(HEADS).index("heat")
+            start = sum(list(HEADS.values())[:heat])
+            self.head.bias[start : start + HEADS["heat"]] = -4.0
         ys, xs = torch.meshgrid(torch.linspace(-1, 1, SIZE), torch.linspace(-1, 1, SIZE), indexing="ij")
         self.register_buffer("coords", torch.stack([xs, ys])[None], persistent=False)
 
@@ -185,7 +190,8 @@ def loss(out: dict[str, torch.Tensor], t: dict[str, torch.Tensor]) -> tuple[torc
     obj = (t["seg"] > 0).float()[:, None]
     n = obj.sum().clamp(min=1)
     parts = {
-        "seg": F.cross_entropy(out["seg"], t["seg"]),
+        # Objects cover a tenth of the image: their pixels weigh more, or the table wins.
+        "seg": F.cross_entropy(out["seg"], t["seg"], weight=SEG_WEIGHT.to(out["seg"])),
         "heat": focal_heat(out["heat"], t["heat"]),
         "offset": (F.smooth_l1_loss(out["offset"], t["offset"], reduction="none", beta=0.05) * obj).sum() / n,
         "z": (F.smooth_l1_loss(out["z"], t["z"], reduction="none", beta=0.05) * obj).sum() / n,

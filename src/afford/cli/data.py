@@ -27,6 +27,7 @@ def cmd_generate(args) -> int:
         layout=args.layout,
         images=not args.poses_only,
         masks=args.masks,
+        splits_of=args.splits_of,
         executor="ray" if args.ray is not None else "local",
         address=args.ray or None,
     )
@@ -271,6 +272,14 @@ def add_parsers(sub) -> None:
         action="store_true",
         help="also keep each state's instance mask (the object slot seen at each pixel, from MuJoCo's "
         "segmentation rendering): the ground truth the object perception net learns from",
+    )
+    g.add_argument(
+        "--splits-of",
+        type=int,
+        metavar="M",
+        help="hold out the val and test splits of an M-sequence dataset of the same seed (its first "
+        "sequences are this one's), so that a smaller dataset is measured on the larger one's splits, "
+        "e.g. --sequences 5200 --splits-of 10000 (default: this dataset's own)",
     )
     g.add_argument("--json", action="store_true", help="no progress bar; print a JSON report")
     g.set_defaults(func=cmd_generate)

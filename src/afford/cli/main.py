@@ -1,6 +1,6 @@
 """The `afford` command line: one parser, a module per command group, one-line errors.
 
-Each group (`scene.py`, `planning.py`, `data.py`, `nets.py`) adds its subcommands with
+Each group (`scene.py`, `planning.py`, `data.py`, `nets.py`, `weights.py`) adds its subcommands with
 `add_parsers`; every error a user can cause is an `afford.errors.UserError`, printed here as
 one line with exit status 2.
 """
@@ -10,11 +10,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from afford.cli import data, nets, planning, scene
+from afford.cli import data, nets, planning, scene, weights
 from afford.errors import UserError
 
 # The command groups, in the order `afford --help` lists them.
-GROUPS = (scene, planning, data, nets)
+GROUPS = (scene, planning, data, nets, weights)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -210,10 +210,14 @@ def cmd_export(args) -> int:
     return 0
 
 
-PRESET_NAMES = {
-    "recognition": ("cpu", "paper", "tiny"),
-    "prediction": ("cpu", "dense-cpu", "paper", "tiny", "tiny-dense"),
-}
+def _preset_names() -> dict[str, tuple[str, ...]]:
+    from afford.prediction.config import PRESETS as PREDICTION
+    from afford.recognition.config import PRESETS as RECOGNITION
+
+    return {"recognition": tuple(RECOGNITION), "prediction": tuple(PREDICTION)}
+
+
+PRESET_NAMES = _preset_names()
 
 
 def add_parsers(sub) -> None:

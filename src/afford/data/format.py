@@ -134,9 +134,16 @@ class Manifest:
         raise IndexError(index)
 
 
-def default_splits(n: int) -> dict[str, list[int]]:
-    """val and test held out in the paper's proportion (500 each of 26,563), at least 1 each."""
-    held = max(1, round(n * PAPER_HELD_OUT / PAPER_SEQUENCES)) if n >= 3 else 0
+def default_splits(n: int, of: int | None = None) -> dict[str, list[int]]:
+    """val and test held out in the paper's proportion (500 each of 26,563), at least 1 each.
+
+    With `of`, the val and test splits are those of an `of`-sequence dataset of the same seed,
+    which shares the first sequences: a smaller dataset measured on the larger one's splits.
+    """
+    size = n if of is None else of
+    held = max(1, round(size * PAPER_HELD_OUT / PAPER_SEQUENCES)) if size >= 3 else 0
+    if 2 * held >= n and of is not None:
+        raise DataError(f"the splits of {of} sequences hold out {2 * held}: more than {n} sequences")
     return {"val": [0, held], "test": [held, 2 * held], "train": [2 * held, n]}
 
 

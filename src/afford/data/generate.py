@@ -55,6 +55,9 @@ class GenerateConfig:
     # True: each state also keeps its instance mask (the slot seen per pixel), which the object
     # perception net learns from (`--masks`).
     masks: bool = False
+    # The val and test splits of a dataset of this many sequences (None: of this one's), e.g. the
+    # first 5,200 sequences of the default dataset with its 188 + 188 held out (`--splits-of`).
+    splits_of: int | None = None
     executor: str = "local"  # a key of EXECUTORS
     address: str | None = None  # the Ray cluster to join (executor "ray"); None: a local instance
 
@@ -105,7 +108,7 @@ def _manifest_for(config: GenerateConfig) -> Manifest:
         shard_size=config.shard_size,
         max_steps=config.max_steps,
         slots=slots,
-        splits=default_splits(config.sequences),
+        splits=default_splits(config.sequences, config.splits_of),
         generator={
             "afford": __version__,
             "layout": asdict(LAYOUTS[config.layout]),
@@ -157,6 +160,11 @@ def prepare(root: Path, config: GenerateConfig) -> Manifest:
                 f"{m.shard_size}, max steps {m.max_steps}, {turns} turns, {drawn} actions, {layout} "
                 f"layout, {'with images' if images else 'poses only'}{', masks' if masks else ''}; resume "
                 "it with the same settings or use another --out"
+            )
+        if m.splits != default_splits(config.sequences, config.splits_of):
+            raise DataError(
+                f"{root}: holds a dataset with the splits {m.splits}; resume it with the --splits-of "
+                "it was made with or use another --out"
             )
         return m
     m = _manifest_for(config)

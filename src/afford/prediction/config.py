@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from afford.sim.affordances import TYPES
 from afford.sim.camera import SIZE
@@ -188,11 +188,19 @@ class PredictionConfig:
 # Tests' nets: a few batches of 4, built in the training thread.
 _TINY_SCHEDULE = {"batch_size": 4, "loader_workers": 0, "steps": 20, "eval_every": 10, "log_every": 5}
 
+# The spatial latent: it learns in thousands of batches, not a million. Adam, because SignSGD at
+# the paper's rate needs the paper's million batches.
+_CPU = PredictionConfig(
+    architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=4200
+)
+
 PRESETS = {
-    # The spatial latent: it learns in thousands of batches, not a million. Adam, because
-    # SignSGD at the paper's rate needs the paper's million batches.
-    "cpu": PredictionConfig(
-        architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=4200
+    "cpu": _CPU,
+    # The shipped prediction net's recipe (afford/recipes.py; with --more-data data/effects): two
+    # outcomes forked in the latent, the second drawing side effects, half the runs holding one,
+    # and the gradient clipped, which a two-outcome run from scratch needs.
+    "cpu-two-outcome": replace(
+        _CPU, hypotheses=2, hypotheses_by="effect", fork="latent", effect_fraction=0.5, grad_clip=1.0
     ),
     # The dense net at CPU size (the shipped net before the spatial one), for comparison.
     "dense-cpu": PredictionConfig(),

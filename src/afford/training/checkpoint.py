@@ -119,11 +119,13 @@ def export_weights(
     half: bool = True,
     extra: dict | None = None,
     config: dict | None = None,
+    beside: dict[str, str] | None = None,
 ) -> int:
     """A checkpoint's weights alone (no optimiser state), float16 by default, for shipping.
 
     Returns the file size in bytes. `extra` is merged into the metadata (e.g. the tuned cut-off),
-    `config` into the net's config (values fitted after training, e.g. a head's calibration).
+    `config` into the net's config (values fitted after training, e.g. a head's calibration);
+    `beside` adds safetensors metadata keys next to the checkpoint's own (e.g. its recipe).
     """
     tensors, meta = read_checkpoint(src, kind)
     if config:
@@ -135,7 +137,7 @@ def export_weights(
     meta = {**meta, "param_groups": [], "extra": {**(extra or {}), "exported_from": str(src)}}
     dst = Path(dst)
     dst.parent.mkdir(parents=True, exist_ok=True)
-    save_file(out, str(dst), metadata={"afford": json.dumps(meta)})
+    save_file(out, str(dst), metadata={**(beside or {}), "afford": json.dumps(meta)})
     return dst.stat().st_size
 
 

@@ -1,0 +1,315 @@
+"""Every stage of the shipped weights' recipes: one `afford` command each, in the order they run.
+
+A stage is a dataset made (`afford generate`, `afford data predict`), a training run, a
+calibration (`afford eval`, which writes a cut-off or a head's scaling into the run) or an
+export (`afford weights export`). Its minutes are those recorded on 2 cores; None where no time
+was recorded. Its note says how the first run differed from the command here, or what is not
+known of it.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass
+
+KINDS = ("data", "train", "calibrate", "export")
+# Where `afford weights make` puts what it makes, relative to the folder it runs in.
+MADE = "runs/made-weights"
+
+
+@dataclass(frozen=True)
+class Stage:
+    name: str  # unique; also its stamp's file name
+    kind: str  # one of KINDS
+    command: str  # one `afford` command line, run in the repository root
+    minutes: float | None  # on 2 cores, as recorded; None: never recorded
+    note: str = ""  # how the first run differed, or what is not known of it
+
+    @property
+    def argv(self) -> list[str]:
+        return shlex.split(self.command)
+
+    def record(self) -> dict:
+        return {
+            "name": self.name,
+            "kind": self.kind,
+            "command": self.command,
+            "minutes": self.minutes,
+            "note": self.note,
+        }
+
+
+def _stage(name: str, kind: str, command: str, minutes: float | None, note: str = "") -> Stage:
+    return Stage(name, kind, " ".join(command.split()), minutes, " ".join(note.split()))
+
+
+_PREDICT_FIRST = (
+    "the command named no --prediction, so the states came from the prediction net shipped then: "
+    "the one-outcome net of runs/prediction"
+)
+_EXPORTED = "first written by `afford export` (the same float16 weights and calibrated config)"
+
+# Every stage, in the order `afford weights make` runs them: each after the stages it reads.
+STAGES: tuple[Stage, ...] = (
+    _stage(
+        "data-cpu",
+        "data",
+        "afford generate --out data/cpu --sequences 10000 --seed 0 --workers 2",
+        14,
+        "the default dataset: 34,744 executions, val and test 188 sequences each; 14 min as recorded "
+        "when it was made again whole, 45 min or more on a machine making 10-13 executions a second",
+    ),
+    _stage(
+        "data-part",
+        "data",
+        "afford generate --out data/part --sequences 5200 --seed 0 --splits-of 10000",
+        None,
+        "the first 5,200 sequences of data/cpu with its val and test splits (4,824 training "
+        "sequences); first made as a view of data/cpu's first 208 shards with a manifest written by "
+        "hand, so its generation time was never recorded",
+    ),
+    _stage(
+        "data-effects",
+        "data",
+        "afford generate --out data/effects --sequences 1500 --seed 11 --actions effects --workers 2",
+        19,
+        "side effects sought: 5,264 executions with MuJoCo 4.0.1, 5,265 with the build it was first "
+        "made with; 8.5 min on the machine that first made it",
+    ),
+    _stage(
+        "data-balances",
+        "data",
+        "afford generate --out data/balances --sequences 1500 --seed 21 --layout balances",
+        3.7,
+        "blocks balanced near tipping: 4,555 executions",
+    ),
+    _stage(
+        "data-cont",
+        "data",
+        "afford generate --out data/cont --sequences 6000 --seed 2 --turn-angles continuous --workers 2",
+        7,
+        "turns by any angle: 20,920 executions",
+    ),
+    _stage(
+        "train-prediction-one-outcome",
+        "train",
+        "afford train prediction --data data/cpu --preset cpu --out runs/prediction",
+        72,
+        "the one-outcome net, shipped before the two-outcome one; its rollouts are the predicted "
+        "states the recognition and agreement models train on",
+    ),
+    _stage(
+        "predict-recognition-states",
+        "data",
+        "afford data predict data/cpu --out data/predicted/train-3000.npz --sequences 3000 "
+        "--prediction runs/prediction/best.safetensors",
+        7,
+        f"10,493 states; {_PREDICT_FIRST}; 7 min while sharing the machine",
+    ),
+    _stage(
+        "predict-agreement-states",
+        "data",
+        "afford data predict data/part --split train --sequences 1500 --out data/predicted/words-train.npz "
+        "--prediction runs/prediction/best.safetensors",
+        None,
+        _PREDICT_FIRST,
+    ),
+    _stage(
+        "train-recognition-10k",
+        "train",
+        "afford train recognition --data data/cpu --preset cpu --set steps=10000 --out runs/recognition-10k",
+        75,
+        "10,000 batches of 32 from scratch",
+    ),
+    _stage(
+        "train-recognition",
+        "train",
+        "afford train recognition --data data/cpu --preset cpu --init runs/recognition-10k/last.safetensors "
+        "--predicted data/predicted/train-3000.npz --set steps=4000 --set lr=5e-4 --set warmup=100 "
+        "--set predicted_fraction=0.25 --out runs/rec-10k-ft",
+        37,
+        "4,000 batches more at a lower rate, a quarter of the draws predicted states",
+    ),
+    _stage(
+        "calibrate-recognition",
+        "calibrate",
+        "afford eval recognition --run runs/rec-10k-ft --data data/cpu",
+        None,
+        "the cut-off picked on val (0.50: the best recall within 0.15 spurious detections per image), "
+        "in RUN/threshold.json",
+    ),
+    _stage(
+        "export-recognition",
+        "export",
+        f"afford weights export recognition.safetensors --run runs/rec-10k-ft --out {MADE}",
+        None,
+        "float32 with its cut-off; first written by `afford export`",
+    ),
+    _stage(
+        "train-prediction",
+        "train",
+        "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
+        "--out runs/scratch-clip",
+        95,
+        "4,200 batches; first run as --preset cpu --set hypotheses=2 --set hypotheses_by=effect --set "
+        "fork=latent --set effect_fraction=0.5 --set grad_clip=1.0 (the same config), stopped once and "
+        "resumed from its batch-1,750 checkpoint",
+    ),
+    _stage(
+        "calibrate-prediction",
+        "calibrate",
+        "afford eval prediction --run runs/scratch-clip --data data/part --no-futures",
+        None,
+        "the choice head's Platt scaling fitted on val, one for all action types and one per type, "
+        "in RUN/calibration.json",
+    ),
+    _stage(
+        "export-prediction",
+        "export",
+        f"afford weights export prediction.safetensors --run runs/scratch-clip --out {MADE}",
+        None,
+        _EXPORTED,
+    ),
+    _stage(
+        "train-member-1",
+        "train",
+        "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
+        "--set seed=1 --set bootstrap=true --out runs/member1",
+        94,
+        "the shipped net's recipe on its own seed and bootstrap resample; first run with --preset cpu "
+        "and the same --set fields as the prediction net",
+    ),
+    _stage(
+        "train-member-1-balances",
+        "train",
+        "afford train prediction --data data/part --more-data data/effects --more-data data/balances "
+        "--preset cpu-two-outcome --init runs/member1/best.safetensors --set seed=1 --set bootstrap=true "
+        "--set lr=3e-4 --set warmup=50 --steps 1000 --out runs/m1bal",
+        30.4,
+        "first started from the member as shipped then (runs/member1 exported in float16 with its "
+        "head calibrated: git show 4669474:src/afford/weights/ensemble/prediction-1.safetensors), "
+        "not from runs/member1's float32 checkpoint",
+    ),
+    _stage(
+        "calibrate-member-1",
+        "calibrate",
+        "afford eval prediction --run runs/m1bal --data data/part --no-futures",
+        None,
+    ),
+    _stage(
+        "export-member-1",
+        "export",
+        f"afford weights export ensemble/prediction-1.safetensors --run runs/m1bal --out {MADE}",
+        None,
+        "first written by `afford export --member` (the same float16 weights and calibrated config)",
+    ),
+    _stage(
+        "train-member-2",
+        "train",
+        "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
+        "--set effect_fraction=0.3 --set place_effect_fraction=0.2 --set seed=2 --set bootstrap=true "
+        "--out runs/place",
+        93,
+        "place runs with a side effect drawn more often; first run with --preset cpu and the "
+        "prediction net's --set fields",
+    ),
+    _stage(
+        "calibrate-member-2",
+        "calibrate",
+        "afford eval prediction --run runs/place --data data/part --no-futures",
+        None,
+    ),
+    _stage(
+        "export-member-2",
+        "export",
+        f"afford weights export ensemble/prediction-2.safetensors --run runs/place --out {MADE}",
+        None,
+        "first written by `afford export --member` (the same float16 weights and calibrated config)",
+    ),
+    _stage(
+        "train-continuous-mixed",
+        "train",
+        "afford train prediction --data data/cont --more-data data/effects --preset cpu-two-outcome "
+        "--init runs/scratch-clip/best.safetensors --set turn_fraction=0.5 --set effect_fraction=0.3 "
+        "--set lr=3e-4 --set warmup=50 --steps 1400 --out runs/cont",
+        31,
+        "the prediction net fine-tuned on continuous turns with the side effects joined; first run "
+        "with --preset cpu and the prediction net's --set fields",
+    ),
+    _stage(
+        "train-continuous",
+        "train",
+        "afford train prediction --data data/cont --preset cpu-two-outcome --init runs/cont/best.safetensors "
+        "--set turn_fraction=0.7 --set effect_fraction=0 --set lr=5e-4 --set warmup=50 --steps 1400 "
+        "--out runs/turns",
+        31,
+        "data/cont alone, 70% of the runs holding a turn; first run with --preset cpu and the "
+        "prediction net's --set fields but effect_fraction, which the file's config records as 0",
+    ),
+    _stage(
+        "calibrate-continuous",
+        "calibrate",
+        "afford eval prediction --run runs/turns --data data/part --no-futures",
+        None,
+        "first fitted one for all action types only (sigmoid(0.85 z - 0.44)), before the fit per type "
+        "existed: made again, the file also carries a scaling per type",
+    ),
+    _stage(
+        "export-continuous",
+        "export",
+        f"afford weights export continuous/prediction.safetensors --run runs/turns --out {MADE}",
+        None,
+        "first written by `afford export`, whose recognition net was not kept in continuous/",
+    ),
+    _stage(
+        "train-agreement-8k",
+        "train",
+        "afford train goals --data data/part --predicted data/predicted/words-train.npz --out runs/attend8k",
+        38.8,
+        "the cpu preset: 8,000 batches of 40 draws",
+    ),
+    _stage(
+        "train-agreement-11k",
+        "train",
+        "afford train goals --data data/part --predicted data/predicted/words-train.npz "
+        "--init runs/attend8k/best.safetensors --steps 3000 --set lr=1e-3 --set warmup=50 "
+        "--out runs/attend11k",
+        14,
+    ),
+    _stage(
+        "train-agreement-17k",
+        "train",
+        "afford train goals --data data/part --predicted data/predicted/words-train.npz "
+        "--init runs/attend11k/best.safetensors --steps 6000 --set lr=1e-3 --set warmup=50 "
+        "--out runs/attend17k",
+        33,
+        "33 min with a pause",
+    ),
+    _stage(
+        "train-agreement-ground",
+        "train",
+        "afford train goals --data data/part --predicted data/predicted/words-train.npz --preset cpu "
+        "--init runs/attend17k/best.safetensors --set loss_ground=1.0 --set lr=1e-3 --set warmup=50 "
+        "--steps 3000 --out runs/ground",
+        12.4,
+        "the attention maps taught where the clause's objects are",
+    ),
+    _stage(
+        "train-agreement",
+        "train",
+        "afford train goals --data data/part --predicted data/predicted/words-train.npz --preset cpu "
+        "--init runs/ground/best.safetensors --set loss_ground=1.0 --set geometry=true --set lr=1e-3 "
+        "--set warmup=50 --steps 2000 --out runs/geom",
+        8,
+        "the geometric read of the maps' centres",
+    ),
+    _stage(
+        "export-agreement",
+        "export",
+        f"afford weights export agreement.safetensors --run runs/geom --out {MADE}",
+        None,
+        "float16; how the file was first written is not recorded",
+    ),
+)
+
+BY_NAME: dict[str, Stage] = {s.name: s for s in STAGES}

@@ -70,6 +70,23 @@ class State:
         )
         return cls(poses, held, slots, members, hidden)
 
+    @classmethod
+    def of_specs(cls, specs, held: int = -1) -> State:
+        """A scene description's state as written (ObjectSpecs: kind, pos, quat), neither
+        simulated nor rendered, so nothing is hidden: what goal sentences are read against
+        where no simulator is at hand (the goal grammar's test set and benchmark)."""
+        from afford.sim.mjcf import slot_names
+
+        slots = tuple(name for name, _ in slot_names())
+        poses = np.full((len(slots), 7), np.nan, dtype=np.float32)
+        counts: dict[str, int] = {}
+        for spec in specs:
+            name = f"{spec.kind}{counts.get(spec.kind, 0)}"
+            counts[spec.kind] = counts.get(spec.kind, 0) + 1
+            poses[slots.index(name)] = (*spec.pos, *spec.quat)
+        members = frozenset(int(k) for k in np.flatnonzero(~np.isnan(poses[:, 0])))
+        return cls(poses, held, slots, members)
+
     def kind(self, k: int) -> str:
         return slot_kind(self.slots[k])
 

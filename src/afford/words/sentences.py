@@ -5,9 +5,12 @@ negation, written in one of several phrasings so that a model learns the relatio
 template. Objects are named by kind ("the cup"), by colour ("the blue cup"), and, where the
 scene holds several of a kind, by their order from the camera's left ("the left support").
 
-`parse` reads a sentence back into clauses against a state (a task's start scene): a word
-outside the vocabulary, a clause in no known phrasing, or a name that fits no object is a
-`SentenceError` naming what it could not read.
+`parse` reads a goal sentence into clauses against a state (a task's start scene). A sentence
+in the phrasings above is read by them, as the agreement model was taught them; any other (an
+instruction, several predicates or subjects, order words, relative references) is read by the
+goal grammar (`grammar.py`, resolved in the scene by `reference.py`) and its clauses written
+in the taught phrasings for the model. What cannot be read is a `SentenceError`: one line
+naming the word or phrase that failed and the nearest reading that can (`suggest.py`).
 """
 
 from __future__ import annotations
@@ -18,12 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from afford.errors import UserError
-from afford.sim.constants import WORDS
+from afford.words.clauses import Clause, SentenceError, Statement
 from afford.words.facts import RELATION_NAMES, RELATIONS, Fact, State
+from afford.words.grammar import Unread, words
+from afford.words.reference import COLOURS, ORDER_WORDS, Ambiguous, Unresolved, names, understand
+from afford.words.suggest import likeness, nearest, plain_sentences
 
-COLOURS = {"cup": "blue", "ball": "red", "support": "black", "block": "yellow"}
-ORDER_WORDS = {2: ("left", "right"), 3: ("left", "middle", "right")}
 # Phrasings per (relation, its word argument or None), true and negated: {x} the subject,
 # {y} the other object.
 PHRASINGS: dict[tuple[str, str | None], tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -83,54 +86,6 @@ CLAUSES = (1, 2, 3)  # clauses per sampled statement, drawn with CLAUSE_P
 CLAUSE_P = (0.6, 0.3, 0.1)
 NEGATED_P = 0.3  # share of sampled clauses written negated
 TRIES = 40  # draws before a sampler gives up on a clause of the truth asked
-
-
-class SentenceError(UserError):
-    """A sentence that cannot be read; the message names the word or clause."""
-
-
-@dataclass(frozen=True)
-class Clause:
-    fact: Fact
-    negated: bool = False
-
-    def holds(self, state: State) -> bool:
-        return self.fact.holds(state) != self.negated
-
-
-@dataclass(frozen=True)
-class Statement:
-    """Clauses joined by "and"; `text` as written."""
-
-    clauses: tuple[Clause, ...]
-    text: str
-
-    def holds(self, state: State) -> bool:
-        return all(c.holds(state) for c in self.clauses)
-
-
-# ---------------------------------------------------------------------------- names
-def names(state: State) -> dict[int, tuple[str, ...]]:
-    """The noun phrases that pick out each object of the state's scene, by slot: an object
-    that shares its kind is named only by its place from the left, and only while every one
-    of its kind stands on the table, clear of the others' by WORDS.beside."""
-    out: dict[int, tuple[str, ...]] = {}
-    kinds: dict[str, list[int]] = {}
-    for k in sorted(state.members):
-        kinds.setdefault(state.kind(k), []).append(k)
-    for kind, slots in kinds.items():
-        if len(slots) == 1:
-            out[slots[0]] = (f"the {kind}", f"the {COLOURS[kind]} {kind}")
-            continue
-        if len(slots) not in ORDER_WORDS or not all(state.standing(k) for k in slots):
-            continue
-        order = sorted(slots, key=lambda k: state.poses[k, 0])
-        xs = [state.poses[k, 0] for k in order]
-        if min(np.diff(xs)) <= WORDS.beside:
-            continue
-        for k, word in zip(order, ORDER_WORDS[len(slots)], strict=True):
-            out[k] = (f"the {word} {kind}", f"the {word} {COLOURS[kind]} {kind}")
-    return out
 
 
 # ---------------------------------------------------------------------------- writing
@@ -266,24 +221,192 @@ def read_clause(part: str) -> Parts:
     )
 
 
-def parse(text: str, state: State) -> Statement:
-    """Read `text` into clauses, its names resolved in `state` (a task's start scene)."""
+def _match(part: str) -> Parts | None:
+    try:
+        return read_clause(part)
+    except SentenceError:
+        return None
+
+
+# The names the sampler writes (`names`): a name of this form that fits no object of a state
+# is refused by the taught reader itself; any other noun phrase is the grammar's to resolve.
+_TAUGHT_NAME = re.compile(
+    r"^the(?: (?:left|middle|right))?(?: (?:blue|red|black|yellow))? (?:cup|ball|support|block)$"
+)
+
+
+class _NoName(Exception):
+    """A noun phrase that is none of the state's taught names."""
+
+
+def _named(phrase: str, called: dict[str, int]) -> int:
+    if phrase not in called:
+        raise _NoName(phrase)
+    return called[phrase]
+
+
+def _taught_clauses(parts: list[Parts], state: State) -> tuple[Clause, ...] | None:
+    """The clauses of parts read by the taught phrasings, their names resolved by the taught
+    names; None where a relation is said of a kind it does not speak of."""
     called = {phrase: k for k, phrases in names(state).items() for phrase in phrases}
     clauses = []
-    for part in clause_texts(text):
-        p = read_clause(part)
+    for p in parts:
+        subject = _named(p.subject, called)
         other: int | str | None = p.other or None
         if p.other == "the table":
             other = "table"
         elif p.other.startswith("the "):
-            other = _resolve(p.other, called)
-        clauses.append(Clause(Fact(p.relation, _resolve(p.subject, called), other), p.negated))
-    return Statement(tuple(clauses), text)
+            other = _named(p.other, called)
+        relation = RELATIONS[p.relation]
+        if state.kind(subject) not in relation.subjects:
+            return None
+        if isinstance(other, int) and state.kind(other) not in relation.other_kinds:
+            return None
+        clauses.append(Clause(Fact(p.relation, subject, other), p.negated))
+    return tuple(clauses)
 
 
-def _resolve(phrase: str, called: dict[str, int]) -> int:
-    if phrase not in called:
+def _taught(text: str, state: State) -> Statement | None:
+    """`text` read as the agreement model was taught to read it (the phrasings and names the
+    sampler writes), kept as its text; None where it is not written so. A taught name that
+    fits no object is refused here, without the grammar: the sampler's sentences are read
+    again on other states of their sequence while a dataset is drawn (`data.py`), often."""
+    said = tokens(text)
+    if not said or not set(said) <= set(vocabulary()):
+        return None
+    parts = [_match(part) for part in " ".join(said).split(" and ")]
+    if any(p is None for p in parts):
+        return None
+    try:
+        clauses = _taught_clauses(parts, state)
+    except _NoName as e:
+        if not _TAUGHT_NAME.match(str(e)):
+            return None
+        raise SentenceError(_no_name(str(e), said, state)) from None
+    return None if clauses is None else Statement(clauses, text)
+
+
+def _no_name(phrase: str, said: list[str], state: State) -> str:
+    """The refusal of a taught name that fits no object, with the sentence under the name of
+    each object of its kind (then any other) that reads."""
+    kind = phrase.split()[-1]
+    alike = [k for k in sorted(state.members) if state.kind(k) == kind]
+    called = names(state)
+    told = [called[k][0] for k in alike if k in called]
+    which = f" ({', '.join(told)})" if told else " (too close together to tell apart by their order)"
+    colour = next((w for w in phrase.split() if w in COLOURS.values()), None)
+    if not alike:
+        reason = f"{phrase!r} names no object of the scene: it has no {kind}s"
+    elif colour is not None and colour != COLOURS[kind]:
+        reason = f"{phrase!r} names no object of the scene: the {kind}s are {COLOURS[kind]}"
+    elif phrase.split()[1] in ORDER_WORDS[3]:
+        reason = f"{phrase!r} names no object of the scene: it has {len(alike)} {kind}s{which}"
+    else:
+        reason = f"{phrase!r} names no object alone: {len(alike)} {kind}s fit it{which}"
+    text = " ".join(said)
+    ranked = sorted(called, key=lambda k: (state.kind(k) != kind, k))
+    for k in ranked:
+        attempt = text.replace(phrase, called[k][0], 1)
+        try:
+            if _taught(attempt, state) is not None:
+                return f"{reason}; did you mean {attempt!r}?"
+        except SentenceError:
+            continue
+    # Not the grammar's search: this refusal is met often while a dataset is drawn, and must
+    # stay cheap; a plain sentence in the taught phrasings reads without the grammar.
+    plain = sorted(plain_sentences(state), key=lambda p: -likeness(p, text))
+    fallback = next((p for p in plain if _taught(p, state) is not None), "the cup is on the table")
+    return f"{reason}; did you mean {fallback!r}?"
+
+
+def written(clauses: tuple[Clause, ...], state: State) -> str | None:
+    """The clauses as the agreement model reads them: each in its first taught phrasing, its
+    objects by their first taught name; None where an object has no taught name (one of
+    several of its kind that do not all stand clearly apart)."""
+    called = names(state)
+    parts = []
+    for c in clauses:
+        f = c.fact
+        if f.subject not in called or (isinstance(f.other, int) and f.other not in called):
+            return None
+        word = f.other if isinstance(f.other, str) and f.other != "table" else None
+        y = "the table" if f.other == "table" else called[f.other][0] if isinstance(f.other, int) else ""
+        parts.append(PHRASINGS[(f.relation, word)][int(c.negated)][0].format(x=called[f.subject][0], y=y))
+    return " and ".join(parts)
+
+
+def _reads(text: str, state: State) -> bool:
+    """Does `text` read in `state`, into clauses the agreement model can be given?"""
+    try:
+        return _taught(text, state) is not None or written(understand(text, state), state) is not None
+    except (SentenceError, Unread, Unresolved, Ambiguous):
+        return False
+
+
+def _nearest(
+    said: list[str], state: State, at: int | None = None, phrase: str = "", fits: tuple[str, ...] = ()
+) -> str:
+    return nearest(said, state, lambda t: _reads(t, state), at, phrase, fits)
+
+
+# Words that pick out an object by what it is near but state no relation a goal can ask for.
+_NEAR = ("next", "beside", "near", "by", "nearest", "closest")
+
+
+def parse(text: str, state: State) -> Statement:
+    """Read `text` into clauses, its names resolved in `state` (a task's start scene): by the
+    taught phrasings where it is written in them, else by the goal grammar, its clauses then
+    written in the taught phrasings as the statement's text (what the agreement model reads).
+    A SentenceError names what failed and suggests the nearest reading that can."""
+    taught = _taught(text, state)
+    if taught is not None:
+        return taught
+    try:
+        clauses = understand(text, state)
+    except Unread as e:
+        said = e.words
+        if e.at is not None and e.reason.startswith("unknown word"):
+            message = f"{e.reason} in {' '.join(said)!r}"
+        else:
+            after = f", after {' '.join(said[: e.at])!r}" if e.at else ""
+            message = f"cannot read {' '.join(said)!r} as a goal: {e.reason}{after}" if said else e.reason
+            near = next((w for w in said if w in _NEAR), None)
+            if near is not None:
+                message += (
+                    f" ({near!r} only picks out an object, as in 'the cup next to the ball'; a goal asks for "
+                    "on, left of, right of, in front of or behind)"
+                )
+        raise SentenceError(f"{message}; did you mean {_nearest(said, state, at=e.at)!r}?") from None
+    except Unresolved as e:
+        suggestion = _nearest(words(text), state, phrase=e.phrase, fits=e.fits)
+        raise SentenceError(f"{e.reason}; did you mean {suggestion!r}?") from None
+    except Ambiguous as e:
+        readings = [written(c, state) or _listing(c, state) for c in e.readings]
         raise SentenceError(
-            f"{phrase!r} names no object of the scene; it has: {', '.join(sorted(called)) or 'none'}"
+            f"{text!r} reads {len(readings)} ways in this scene: "
+            + " or ".join(map(repr, readings[:3]))
+            + f"; did you mean {readings[0]!r}?"
+        ) from None
+    model_text = written(clauses, state)
+    if model_text is None:
+        called = names(state)
+        said = {k for c in clauses for k in (c.fact.subject, c.fact.other) if isinstance(k, int)}
+        unnamed = sorted(k for k in said if k not in called)
+        raise SentenceError(
+            f"{text!r} names {', '.join(state.slots[k] for k in unnamed)}, which the agreement model has no "
+            f"name for: it tells objects of a kind apart only by their order from the left, while all "
+            f"stand clearly apart; did you mean {_nearest(words(text), state)!r}?"
         )
-    return called[phrase]
+    return Statement(clauses, model_text)
+
+
+def _listing(clauses: tuple[Clause, ...], state: State) -> str:
+    return " and ".join(
+        f"{'not ' if c.negated else ''}{c.fact.relation} {state.slots[c.fact.subject]}"
+        + (
+            f" {c.fact.other if isinstance(c.fact.other, str) else state.slots[c.fact.other]}"
+            if c.fact.other is not None
+            else ""
+        )
+        for c in clauses
+    )

@@ -1,0 +1,343 @@
+"""The grammar of goals: what a person may say to the robot, parsed with lark.
+
+A goal is one or more items joined by "and", commas or "then". An item is a state ("the cup is
+on the block", "both balls are gone", "the cup stands upright on the block"), an instruction
+("put the red ball on the block", "knock the cup over", "hand me the ball"), or a state
+after a lead-in ("make sure the cup is upright"). `read` gives every parse of a sentence as
+`Item`s whose noun phrases are not yet resolved: what they refer to depends on the scene
+(`reference.py`), and so does which of two parses is meant.
+
+The grammar is written over whole words: a sentence is first normalised (`words`) and each
+word is one token, so that no word is ever matched as part of another. The meaning of a parse
+is in its rule names: a complement's name is the relation it states ("on", "gone",
+"left_of"), an instruction's the state it asks for (`parses.py` gives each its meaning).
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+
+from lark import Lark, Token
+from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.lexer import Lexer
+from lark.visitors import CollapseAmbiguities
+
+from afford.words.parses import Build, Item
+
+GRAMMAR = r"""
+start: _item (_join _item)*
+_join: "and" | "," | "," "and" | "then" | "and" "then" | "," "then" | "," "and" "then" | "but"
+
+_item: state _after? | command | _lead state _after?
+_after: "any" "more" | "anymore" | "afterwards" | "in" "the" "end" | "at" "the" "end" | "again"
+_lead: "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "that" | "see" "that"
+     | "i" "want" | "i" "want" "that" | "i" "would" "like" | "i" "need" | "i" "expect"
+
+// ------------------------------------------------------------------ states
+state: nps _preds                    -> says
+     | nps complements               -> says_bare
+     | "so" _so nps                  -> ditto
+     | "as" _so nps                  -> ditto
+     | nps _too                      -> ditto
+     | nps _so _too                  -> ditto
+     | _holder _holds nps            -> holds
+     | _holder _holds_not nps        -> holds_not
+     | _holder _empty                -> empty
+_so: "is" | "are" | "does" | "do"
+_too: "too" | "as" "well"
+_holder: "the" "gripper" | "the" "robot" | "the" "hand" | "the" "arm" | "you"
+       | "the" "robot" "'s" "gripper" | "the" "robot" "'s" "hand"
+_holds: "holds" | "hold" | "has" | "is" "holding" | "are" "holding" | "grips" | "is" "gripping"
+      | "is" "carrying" | "carries" | _modal "hold" | _modal "be" "holding" | _modal "have"
+_holds_not: "does" "not" "hold" | "do" "not" "hold" | "is" "not" "holding" | "are" "not" "holding"
+          | "does" "not" "have" | _modal "not" "hold" | _modal "not" "be" "holding"
+_empty: "is" "empty" | "holds" "nothing" | "is" "holding" "nothing" | _modal "be" "empty"
+      | _modal "hold" "nothing" | "has" "nothing" | "is" "not" "holding" "anything"
+      | "does" "not" "hold" "anything" | _modal "not" "hold" "anything"
+
+_preds: vp (_and vp)*
+_and: "and" | "," | "," "and" | "but"
+vp: head complements
+  | _stand                           -> stands
+  | _modal _stand_base               -> stands
+head: _pos                           -> yes
+    | _stand                         -> stand
+    | _modal _stand_base             -> stand
+    | "to" _stand_base               -> stand
+    | _neg                           -> no
+_pos: _be | _have | _modal _be_base | _verb | _modal _verb_base | "to" _be_base | "to" _verb_base
+_neg: _modal "not" _be_base | _do "not" _verb_base | _modal "not" _verb_base | "not" "to" _be_base
+    | _do "not" _stand_base | _modal "not" _stand_base
+_be: "is" | "are" | "is" "still" | "are" "still" | "has" "been" | "have" "been" | "is" "now"
+   | "are" "now" | "was" | "were" | "are" "both" | "are" "all" | "both" "are" | "all" "are"
+_have: "has" | "have"
+_be_base: "be" | "be" "still" | "end" "up" | "stay" | "remain" | "be" "left"
+_verb: "sits" | "sit" | "rests" | "rest" | "lies" | "lie" | "stays" | "stay" | "remains"
+     | "remain" | "ends" "up" | "end" "up" | "points" | "point" | "falls" | "fall" | "fell"
+     | "rolls" | "roll" | "rolled" | "sat" | "lay"
+_verb_base: "sit" | "rest" | "lie" | "stay" | "remain" | "end" "up" | "point" | "fall" | "roll"
+_stand: "stands" | "stand" | "stood"
+_stand_base: "stand"
+_modal: "should" | "must" | "has" "to" | "have" "to" | "needs" "to" | "need" "to" | "will"
+      | "shall" | "ought" "to" | "is" "to" | "are" "to" | "should" "now" | "must" "now"
+_do: "does" | "do" | "did"
+
+complements: comp (_and? comp)*
+comp: _on table                      -> on_table
+    | _on nps                        -> on
+    | _end_at "the" side "end" ("of" nps)?     -> on_end
+    | _end_at nps "'s" side "end"    -> on_end_named
+    | _on _ground                    -> off_table
+    | _off table                     -> off_table
+    | _off nps                       -> off
+    | _left_of nps                   -> left_of
+    | _right_of nps                  -> right_of
+    | _front_of nps                  -> in_front_of
+    | _behind nps                    -> behind
+    | "out" "from" "behind" nps      -> out_from_behind
+    | _gone                          -> gone
+    | _visible                       -> visible
+    | _upright                       -> upright
+    | _tipped                        -> tipped
+    | _held                          -> held
+    | _across                        -> across
+    | _lengthwise                    -> lengthwise
+    | "not" comp                     -> not_
+    | "neither" comp "nor" comp      -> neither
+!side: "left" | "right"
+table: "the" "table" | "the" "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
+_ground: "the" "floor" | "the" "ground"
+_on: "on" | "onto" | "upon" | "atop" | "on" "top" "of" | "onto" "the" "top" "of" | "up" "on"
+   | "up" "onto" | "on" "to" | "in" "place" "on"
+_end_at: _on | "at"
+_off: "off" | "off" "of" | "from" | "fallen" "off" | "fell" "off" | "rolled" "off" | "knocked" "off"
+    | "pushed" "off" | "thrown" "off" | "taken" "off" | "removed" "from" | "no" "longer" "on"
+_left_of: "left" "of" | "to" "the" "left" "of" | "on" "the" "left" "of" | "on" "the" "left" "side" "of"
+        | "to" "the" "left" "side" "of" | "at" "the" "left" "of"
+_right_of: "right" "of" | "to" "the" "right" "of" | "on" "the" "right" "of"
+         | "on" "the" "right" "side" "of" | "to" "the" "right" "side" "of" | "at" "the" "right" "of"
+_front_of: "in" "front" "of" | "nearer" "the" "camera" "than" | "nearer" "to" "the" "camera" "than"
+         | "closer" "to" "the" "camera" "than" | "before"
+_behind: "behind" | "in" "back" "of" | "at" "the" "back" "of" | "farther" "from" "the" "camera" "than"
+       | "further" "from" "the" "camera" "than" | "farther" "back" "than" | "further" "back" "than"
+_gone: "gone" | "hidden" | "out" "of" "sight" | "out" "of" "view" | "invisible" | "no" "longer" "there"
+     | "no" "longer" "visible" | "away"
+_visible: "visible" | "in" "sight" | "in" "view" | "still" "there" | "still" "visible"
+_upright: "upright" | "standing" | "standing" "up" | "the" "right" "way" "up" | "right" "side" "up"
+        | "on" "its" "base" | "on" "its" "bottom" | "set" "upright" | "back" "up"
+_tipped: "tipped" "over" | "tipped" | "knocked" "over" | "knocked" "down" | "toppled" | "toppled" "over"
+       | "fallen" "over" | "fell" "over" | "on" "its" "side" | "lying" "on" "its" "side" | "lying" "down"
+       | "upside" "down" | "turned" "over" | "tipped" "on" "its" "side" | "over" "on" "its" "side"
+_held: "held" | "in" "the" "gripper" | "in" "the" "robot" "'s" "hand" | "in" "the" "robot" "'s" "gripper"
+     | "in" "the" "hand" | "in" "hand" | "picked" "up" | "being" "held" | "gripped" | "grasped"
+     | "lifted" | "lifted" "up" | "in" "its" "gripper" | "in" "the" "air" | "carried"
+_across: "across" | "turned" "across" | "lying" "across" | "left" "to" "right" | "crosswise" | "crossways"
+       | "from" "left" "to" "right" | "side" "to" "side"
+_lengthwise: "lengthwise" | "lengthways" | "turned" "lengthwise" | "lying" "lengthwise" | "front" "to" "back"
+           | "away" "from" "the" "camera" | "pointing" "away" "from" "the" "camera" | "pointing" "away"
+
+// ------------------------------------------------------------------ instructions
+command: _polite* action _tail?                        -> do
+       | _polite* _dont action _tail?                  -> dont
+       | _polite* action ","? "without" ing _tail?     -> without
+_polite: _courtesy ","?
+_courtesy: "please" | "can" "you" | "could" "you" | "would" "you" | "will" "you" | "i" "want" "you" "to"
+         | "i" "need" "you" "to" | "i" "would" "like" "you" "to" | "robot" | "now" | "go" "ahead" "and"
+         | "try" "to" | "kindly" | "you" "should" | "you" "must" | "go" "and" | "first" | "finally" | "just"
+         | "ok" | "okay" | "hey" | "lastly" | "next" | "also"
+_tail: "please" | "for" "me" | "thanks" | "thank" "you" | "now" | "," "please" | "," "thanks"
+     | "right" "now" | "if" "you" "can"
+_dont: "do" "not" | "never" | "be" "careful" "not" "to" | "take" "care" "not" "to"
+action: _put nps complements                  -> put
+      | _stand_verb nps complements           -> put_standing
+      | _stand_verb nps "up"                  -> stand_up
+      | _stand_verb "up" nps                  -> stand_up
+      | "pick" "up" nps                       -> take
+      | "pick" nps "up"                       -> take
+      | _take nps                             -> take
+      | _give "me" nps                        -> take
+      | _give nps "to" "me"                   -> take
+      | _tip "over" nps                       -> tip
+      | _tip nps "over"                       -> tip
+      | _topple nps                           -> tip
+      | _rid nps                              -> rid
+      | "throw" "away" nps                    -> rid
+ing: _tip_ing "over" nps                      -> tip
+   | _tip_ing nps "over"                      -> tip
+   | "toppling" nps                           -> tip
+   | _push_ing nps _off table                 -> rid
+   | _push_ing nps _off nps                   -> ing_off
+   | "dropping" nps                           -> rid
+_put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "carry" | "slide" | "push"
+    | "shove" | "roll" | "throw" | "toss" | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
+    | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
+    | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
+_stand_verb: "stand"
+_take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect" | "grip" | "lift" "up"
+     | "hold" "on" "to"
+_give: "hand" | "give" | "bring" | "pass" | "fetch"
+_tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
+_topple: "topple" | "upset" | "overturn"
+_rid: "hide" | "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
+_tip_ing: "knocking" | "tipping" | "pushing" | "turning"
+_push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
+
+// ------------------------------------------------------------------ noun phrases
+nps: np
+   | np ("," np)* ","? "and" np          -> all_of
+   | "both" np "and" np                  -> all_of
+   | "neither" np "nor" np               -> neither_of
+np: _the _mods noun _posts               -> one
+  | _a _mods noun _posts                 -> some
+  | _every _mods noun _posts             -> every
+  | _all _mods nouns _posts              -> every
+  | "the" _mods nouns _posts             -> every
+  | _both _mods nouns _posts             -> both
+  | "the" number _mods nouns _posts      -> counted
+  | "all" number _mods nouns _posts      -> counted
+  | number _mods nouns _posts            -> counted
+  | "no" _mods noun _posts               -> none
+  | "no" _mods nouns _posts              -> none
+  | "none" "of" "the" _mods nouns _posts -> none
+  | "it"                                 -> it
+  | "them"                               -> them
+  | "they"                               -> them
+  | "everything"                         -> everything
+_the: "the" | "this" | "that" | "my"
+_a: "a" | "an" | "one" "of" "the" | "any"
+_every: "every" | "each"
+_all: "all" | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the"
+_both: "both" | "both" "the" | "both" "of" "the"
+!number: "two" | "three"
+_mods: mod*
+!mod: "blue" | "red" | "black" | "yellow" | "left" | "right" | "middle" | "centre" | "center" | "leftmost"
+    | "rightmost" | "first" | "second" | "third" | "last" | "front" | "back" | "rear" | "near" | "far"
+    | "nearest" | "farthest" | "furthest" | "closest" | "left" "hand" | "right" "hand" | "central"
+!noun: "cup" | "mug" | "ball" | "sphere" | "support" | "pillar" | "pedestal" | "block" | "brick" | "plank"
+     | "beam" | "bar" | "one" | "thing" | "object"
+!nouns: "cups" | "mugs" | "balls" | "spheres" | "supports" | "pillars" | "pedestals" | "blocks" | "bricks"
+      | "planks" | "beams" | "bars" | "ones" | "things" | "objects"
+_posts: post*
+?post: _left_of np                       -> left_of
+    | _right_of np                       -> right_of
+    | _front_of np                       -> in_front_of
+    | _behind np                         -> behind
+    | _on np                             -> on
+    | _on table                          -> on_table
+    | _that head complements             -> that
+    | _near np                           -> nearest
+    | place
+    | "from" "the" side                  -> counted_from
+_that: "that" | "which"
+_near: "nearest" | "nearest" "to" | "closest" "to" | "next" "to" | "beside" | "near" | "by"
+!place: "on" "the" "left" | "on" "the" "right" | "to" "the" "left" | "to" "the" "right"
+            | "in" "the" "middle" | "in" "the" "centre" | "in" "the" "center" | "at" "the" "front"
+            | "at" "the" "back" | "in" "front" | "at" "the" "left" | "at" "the" "right"
+            | "on" "the" "far" "left" | "on" "the" "far" "right"
+"""
+
+MAX_PARSES = 64  # a sentence with more readings than this is refused as too tangled to read
+MAX_WORDS = 60  # and one longer than this, before its parses are counted (they grow fast)
+
+
+class Unread(Exception):
+    """A sentence the grammar cannot read: the reason, its words, and the index of the word
+    where it failed (None: at the end, or nowhere in particular)."""
+
+    def __init__(self, reason: str, words: list[str], at: int | None) -> None:
+        super().__init__(reason)
+        self.reason, self.words, self.at = reason, words, at
+
+
+# ---------------------------------------------------------------------------- words
+_CONTRACTIONS = (
+    (r"\bcan't\b", "can not"),
+    (r"\bcannot\b", "can not"),
+    (r"\bwon't\b", "will not"),
+    (r"\bshan't\b", "shall not"),
+    (r"n't\b", " not"),
+    (r"\b(it|that|there|what|which|who)'s\b", r"\1 is"),
+    (r"'re\b", " are"),
+    (r"'d\b", " would"),
+    (r"'ll\b", " will"),
+    (r"'s\b", " 's"),
+    (r"\b1st\b", "first"),
+    (r"\b2nd\b", "second"),
+    (r"\b3rd\b", "third"),
+    (r"\b2\b", "two"),
+    (r"\b3\b", "three"),
+)
+
+
+def words(text: str) -> list[str]:
+    """The sentence as the grammar's words: lower case, contractions spelt out ("isn't": "is
+    not", "block's": "block 's"), hyphens as spaces, commas kept as words of their own (they
+    join items and lists), the rest of the punctuation dropped."""
+    t = text.lower().replace("\u2019", "'").replace("\u2018", "'")
+    for pattern, spelt in _CONTRACTIONS:
+        t = re.sub(pattern, spelt, t)
+    t = re.sub(r"[;:]", ",", t)
+    t = re.sub(r"[-/]", " ", t)
+    t = re.sub(r"[.!?\"()]", " ", t)
+    t = t.replace(",", " , ")
+    return t.split()
+
+
+class _Words(Lexer):
+    """Each word of a normalised sentence is one token, of the terminal that spells it."""
+
+    def __init__(self, lexer_conf) -> None:
+        self.types = {t.pattern.value: t.name for t in lexer_conf.terminals if t.pattern.type == "str"}
+
+    def lex(self, data: str):
+        pos = 0
+        for i, word in enumerate(data.split(" ")):
+            # The column is the word's index: where a parse fails is named as a word.
+            yield Token(self.types[word], word, start_pos=pos, end_pos=pos + len(word), line=1, column=i)
+            pos += len(word) + 1
+
+
+@functools.cache
+def parser() -> Lark:
+    """The grammar built once (Earley: natural sentences are ambiguous, and every parse is
+    kept so that the scene can tell which is meant)."""
+    return Lark(GRAMMAR, parser="earley", lexer=_Words, ambiguity="explicit", propagate_positions=True)
+
+
+@functools.cache
+def known_words() -> frozenset[str]:
+    """Every word the grammar reads."""
+    return frozenset(t.pattern.value for t in parser().lexer_conf.terminals if t.pattern.type == "str")
+
+
+def read(text: str) -> list[tuple[Item, ...]]:
+    """Every parse of `text`, as items in the order said; `Unread` if it has none."""
+    said = words(text)
+    if not said:
+        raise Unread("the goal sentence is empty", said, None)
+    known = known_words()
+    for i, w in enumerate(said):
+        if w not in known:
+            raise Unread(f"unknown word {w!r}", said, i)
+    if len(said) > MAX_WORDS:
+        raise Unread(f"it has {len(said)} words, more than {MAX_WORDS}", said, None)
+    joined = " ".join(said)
+    try:
+        tree = parser().parse(joined)
+    except UnexpectedEOF:
+        raise Unread("it ends too early", said, None) from None
+    except UnexpectedToken as e:
+        raise Unread(f"{e.token.value!r} does not fit there", said, e.token.column) from None
+    except UnexpectedInput as e:
+        raise Unread("it does not read as a goal", said, getattr(e, "column", None)) from None
+    trees = CollapseAmbiguities().transform(tree)
+    if len(trees) > MAX_PARSES:
+        raise Unread(f"it reads {len(trees)} ways", said, None)
+    build = Build(joined)
+    readings: list[tuple[Item, ...]] = []
+    for t in trees:
+        items = build.transform(t)
+        if items not in readings:
+            readings.append(items)
+    return readings

@@ -1,0 +1,383 @@
+"""What the words of a goal refer to in a scene, and the clauses they say of it.
+
+A parse (`grammar.read`) names objects by kind, colour, order ("the second cup", "the cup on
+the left"), relation to another ("the cup left of the ball", "the cup that is upright") or
+pronoun ("put it on the block"); here each noun phrase is resolved against the task's start
+state to the object slots it names, and each relation said of it becomes a `Clause`. A phrase
+that names no object, or more than one where one is meant, is refused with its words; so is a
+sentence whose parses read to different clauses in the scene and that the scene cannot tell
+apart.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from afford.sim.constants import WORDS
+from afford.words import grammar
+from afford.words.clauses import Clause
+from afford.words.facts import RELATIONS, Fact, State
+from afford.words.parses import ORDER, Item, Noun, Pred
+
+COLOURS = {"cup": "blue", "ball": "red", "support": "black", "block": "yellow"}
+ORDER_WORDS = {2: ("left", "right"), 3: ("left", "middle", "right")}
+PLURALS = {"cup": "cups", "ball": "balls", "support": "supports", "block": "blocks", None: "objects"}
+# What a relation says of its subject, for messages: "'the ball' cannot be upright".
+SAID = {
+    "on": "on something",
+    "on_end": "on an end of the block",
+    "gone": "gone",
+    "tipped": "tipped over",
+    "upright": "upright",
+    "held": "held",
+    "lies": "turned across or lengthwise",
+    "left_of": "left of something",
+    "right_of": "right of something",
+    "in_front_of": "in front of something",
+    "behind": "behind something",
+}
+QUANTITIES = {"both": 2, "two": 2, "three": 3}
+
+
+class Unresolved(Exception):
+    """A noun phrase or clause that fits nothing the scene allows: the reason, the words of
+    the phrase that failed (a suggestion replaces them) and the kinds that would fit there."""
+
+    def __init__(self, reason: str, phrase: str = "", fits: tuple[str, ...] = ()) -> None:
+        super().__init__(reason)
+        self.reason, self.phrase, self.fits = reason, phrase, fits
+
+
+class Ambiguous(Exception):
+    """A sentence whose parses read to different clauses in the scene."""
+
+    def __init__(self, readings: list[tuple[Clause, ...]]) -> None:
+        super().__init__("reads more than one way")
+        self.readings = readings
+
+
+# ---------------------------------------------------------------------------- names
+def names(state: State) -> dict[int, tuple[str, ...]]:
+    """The noun phrases that pick out each object of the state's scene, by slot: an object
+    that shares its kind is named only by its place from the left, and only while every one
+    of its kind stands on the table, clear of the others' by WORDS.beside. These are the names
+    the agreement model was taught; a goal may name objects in more ways (`resolve`)."""
+    out: dict[int, tuple[str, ...]] = {}
+    kinds: dict[str, list[int]] = {}
+    for k in sorted(state.members):
+        kinds.setdefault(state.kind(k), []).append(k)
+    for kind, slots in kinds.items():
+        if len(slots) == 1:
+            out[slots[0]] = (f"the {kind}", f"the {COLOURS[kind]} {kind}")
+            continue
+        if len(slots) not in ORDER_WORDS or not all(state.standing(k) for k in slots):
+            continue
+        order = sorted(slots, key=lambda k: state.poses[k, 0])
+        xs = [state.poses[k, 0] for k in order]
+        if min(np.diff(xs)) <= WORDS.beside:
+            continue
+        for k, word in zip(order, ORDER_WORDS[len(slots)], strict=True):
+            out[k] = (f"the {word} {kind}", f"the {word} {COLOURS[kind]} {kind}")
+    return out
+
+
+def _listed(state: State, slots: list[int]) -> str:
+    called = names(state)
+    return ", ".join(called[k][0] if k in called else state.slots[k] for k in slots)
+
+
+# ---------------------------------------------------------------------------- noun phrases
+@dataclass
+class _Context:
+    """What a sentence has named so far, most recent first, for "it" and "them"; and how many
+    relative references it used that picked nothing out (the object was the only one of its
+    kind already), which makes a parse less likely to be the one meant."""
+
+    mentioned: list[list[int]]
+    subjects: list[int]
+    loose: int = 0
+    # "the right one": the kind of the last noun said in the same role (subject or other)
+    kinds: dict[str, str] = field(default_factory=dict)
+    role: str = "subject"
+
+
+def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
+    """The slots `noun` names in `state` (its start scene); Unresolved when it names none, or
+    several where it names one. Pronouns are resolved by the clause (`_pronoun`)."""
+    if noun.quantity == "it":  # only a clause's own subject or object may be "it" (`_pronoun`)
+        raise Unresolved(f"{noun.words!r} cannot name an object inside another name", noun.words)
+    if noun.quantity == "them":
+        if not context.subjects:
+            raise Unresolved(f"{noun.words!r} refers to nothing said before it", noun.words)
+        return list(context.subjects)
+    if noun.quantity == "everything":
+        return sorted(state.members)
+    kind = noun.kind
+    if kind is None and noun.colour is None and noun.words.split()[-1] in ("one", "ones"):
+        kind = context.kinds.get(context.role)
+    role = context.role
+    fits = [k for k in sorted(state.members) if kind is None or state.kind(k) == kind]
+    plural = PLURALS[kind]
+    if not fits:
+        raise Unresolved(f"{noun.words!r} names no object of the scene: it has no {plural}", noun.words)
+    if noun.colour is not None:
+        fits = [k for k in fits if COLOURS[state.kind(k)] == noun.colour]
+        if not fits:
+            told = f"the {plural} are {COLOURS[kind]}" if kind else f"nothing is {noun.colour}"
+            raise Unresolved(f"{noun.words!r} names no object of the scene: {told}", noun.words, _own(noun))
+    for pred in noun.restrict:
+        before = len(fits)
+        fits = [k for k in fits if _holds_of(pred, k, state, context)]
+        context.loose += before == 1
+    for other in noun.nearest:
+        before = len(fits)
+        fits = _nearest(noun, fits, other, state, context)
+        context.loose += before == 1
+    if not fits:
+        raise Unresolved(f"{noun.words!r} names no object of the scene", noun.words, _own(noun))
+    for word in noun.order:
+        fits = _in_order(noun, word, fits, state)
+    if kind is not None:  # after the phrases inside it ("the cup left of the ball": cup)
+        context.kinds[role] = kind
+    return _counted(noun, fits, state)
+
+
+def _own(noun: Noun) -> tuple[str, ...]:
+    """The kind a failed phrase names, whose objects a suggestion names first."""
+    return (noun.kind,) if noun.kind else ()
+
+
+def _counted(noun: Noun, fits: list[int], state: State) -> list[int]:
+    want = QUANTITIES.get(noun.quantity)
+    if noun.quantity in ("one", "some") and len(fits) > 1:
+        raise Unresolved(
+            f"{noun.words!r} names no object alone: {len(fits)} {PLURALS[noun.kind]} fit it "
+            f"({_listed(state, fits)})",
+            noun.words,
+            _own(noun),
+        )
+    if want is not None and len(fits) != want:
+        counted = f"{len(fits)} {PLURALS[noun.kind] if len(fits) != 1 else noun.kind or 'object'}"
+        raise Unresolved(f"{noun.words!r}: the scene has {counted}, not {want}", noun.words, _own(noun))
+    return fits
+
+
+def _holds_of(pred: Pred, k: int, state: State, context: _Context) -> bool:
+    """Does relation `pred` hold of slot k in the start state (a relative reference)?"""
+    relation = RELATIONS[pred.relation]
+    if state.kind(k) not in relation.subjects:
+        return False
+    if isinstance(pred.other, tuple):
+        others = [o for n in pred.other for o in resolve(n, state, context)]
+        facts = [Fact(pred.relation, k, o) for o in others if o != k]
+        if len(facts) < len(others):
+            return False
+    else:
+        facts = [Fact(pred.relation, k, pred.other)]
+    return all(f.holds(state) != pred.negated for f in facts)
+
+
+def _nearest(noun: Noun, fits: list[int], other: Noun, state: State, context: _Context) -> list[int]:
+    """The one of `fits` nearest `other` on the table, clearly nearer than the next."""
+    if other.quantity == "it":
+        raise Unresolved(f"{noun.words!r}: say what it is near by name", noun.words)
+    (o, *more) = _counted(other, resolve(other, state, context), state)
+    if more:
+        raise Unresolved(f"{noun.words!r}: near one object, not {len(more) + 1}", noun.words)
+    ranked = sorted(
+        (float(np.linalg.norm(state.poses[k, :2] - state.poses[o, :2])), k)
+        for k in fits
+        if k != o and state.standing(k) and state.standing(o)
+    )
+    if len(ranked) > 1 and ranked[1][0] - ranked[0][0] <= WORDS.beside:
+        raise Unresolved(f"{noun.words!r}: two objects are about as near; name it another way", noun.words)
+    return [ranked[0][1]] if ranked else []
+
+
+def _in_order(noun: Noun, word: str, fits: list[int], state: State) -> list[int]:
+    """The one of `fits` an order word picks: by place from the camera's left (x) or from its
+    front (y), among those standing on the table, clear of its neighbours by WORDS.beside (as
+    the taught names are)."""
+    axis, rank = ORDER[word]
+    standing = [k for k in fits if state.standing(k)]
+    if len(standing) <= 1 and rank in (0, -1):
+        return standing or fits  # "the left cup" of one cup: it
+    column = 0 if axis == "x" else 1
+    order = sorted(standing, key=lambda k: state.poses[k, column])
+    if axis == "x" and noun.from_right and word in ("first", "second", "third"):
+        order = order[::-1]
+    if rank is None:
+        if len(order) % 2 == 0:
+            raise Unresolved(f"{noun.words!r}: of {len(order)} none is in the middle", noun.words, _own(noun))
+        rank = len(order) // 2
+    if not -len(order) <= rank < len(order):
+        raise Unresolved(
+            f"{noun.words!r} names no object of the scene: there are {len(order)}", noun.words, _own(noun)
+        )
+    i = rank % len(order)
+    here = state.poses[order[i], column]
+    gaps = [abs(here - state.poses[order[j], column]) for j in (i - 1, i + 1) if 0 <= j < len(order)]
+    if gaps and min(gaps) <= WORDS.beside:
+        side = "side by side" if axis == "x" else "one behind the other"
+        raise Unresolved(
+            f"{noun.words!r}: they stand too close {side} to tell which is meant; name it another way",
+            noun.words,
+            _own(noun),
+        )
+    return [order[i]]
+
+
+def _pronoun(noun: Noun, kinds: tuple[str, ...], state: State, context: _Context) -> int:
+    """What "it" refers to: the object most recently named that the relation can be said of
+    (a subject before the objects of the same item), so that "put the ball on the block and
+    knock it over" knocks over the block, which a ball cannot be."""
+    for group in context.mentioned:
+        for k in group:
+            if state.kind(k) in kinds:
+                return k
+    raise Unresolved(f"{noun.words!r} refers to nothing said before it that it could be", noun.words)
+
+
+# ---------------------------------------------------------------------------- clauses
+def _slots(
+    nouns, kinds: tuple[str, ...], state: State, context: _Context, role: str = "subject", known=None
+) -> list[tuple[int, Noun]]:
+    """The slots each of `nouns` names, a pronoun as one of `kinds` can be; `known`: the slots
+    of the others where already resolved (a subject said once, of several relations)."""
+    context.role = role
+    known = {} if known is None else known
+    out = []
+    for i, n in enumerate(nouns):
+        if n.quantity == "it":
+            out.append((_pronoun(n, kinds, state, context), n))
+            continue
+        if i not in known:
+            known[i] = resolve(n, state, context)
+        out += [(k, n) for k in known[i]]
+    slots = [k for k, _ in out]
+    if len(set(slots)) < len(slots):  # "on the block and the right one": a parse that misread
+        raise Unresolved(f"{' and '.join(n.words for n in nouns)!r} names one object twice")
+    return out
+
+
+def _quietly(noun: Noun) -> bool:
+    """A phrase that names a group by its kind ("every object"), whose members a relation may
+    not fit: those are left out rather than refused."""
+    return noun.kind is None and noun.quantity in ("every", "everything", "none", "them")
+
+
+def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...], int]:
+    """The clauses a parse says of `state`, in the order said, and how many of its relative
+    references were loose (picked nothing out)."""
+    context = _Context([], [])
+    said: list[tuple[Clause, bool]] = []  # each clause, and whether it is passing (held on the way)
+    last_preds: tuple[Pred, ...] = ()
+    for item in items:
+        preds = item.preds if item.preds is not None else last_preds
+        subjects_said: list[int] = []
+        others_said: list[int] = []
+        known: dict[int, list[int]] = {}
+        for pred in preds:
+            relation = RELATIONS[pred.relation]
+            for s, noun in _slots(item.subjects, relation.subjects, state, context, known=known):
+                subjects_said.append(s)
+                if state.kind(s) not in relation.subjects:
+                    if pred.implied or _quietly(noun):
+                        continue
+                    raise Unresolved(
+                        f"{noun.words!r} cannot be {SAID[pred.relation]}: "
+                        f"that is said of {_kinds(relation.subjects)}",
+                        noun.words,
+                        relation.subjects,
+                    )
+                for other in _others(pred, s, state, context):
+                    if isinstance(other, int):
+                        others_said.append(other)
+                    denied = noun.denied != pred.negated
+                    said.append((Clause(Fact(pred.relation, s, other), denied), pred.passing))
+        context.mentioned = [subjects_said, others_said, *context.mentioned]
+        context.subjects = list(dict.fromkeys(subjects_said)) or context.subjects
+        last_preds = preds
+    return _settled(said, state), context.loose
+
+
+def _others(pred: Pred, s: int, state: State, context: _Context) -> list[int | str | None]:
+    """The other argument of each clause `pred` makes of subject s."""
+    relation = RELATIONS[pred.relation]
+    if pred.relation == "on_end":
+        for k, noun in _slots(pred.host, ("block",), state, context, "other"):
+            if state.kind(k) != "block":
+                raise Unresolved(
+                    f"{noun.words!r} has no ends a goal can speak of: the block has", noun.words, ("block",)
+                )
+        return [pred.other]
+    if not isinstance(pred.other, tuple):
+        if pred.other is not None and pred.other not in relation.other_words:
+            raise Unresolved(f"{_listed(state, [s])} cannot be {SAID[pred.relation]}")
+        return [pred.other]
+    out: list[int | str | None] = []
+    for k, noun in _slots(pred.other, relation.other_kinds, state, context, "other"):
+        if state.kind(k) not in relation.other_kinds:
+            raise Unresolved(
+                f"nothing can be {pred.relation.replace('_', ' ')} {noun.words!r}: only "
+                f"{_kinds(relation.other_kinds)} can be named there",
+                noun.words,
+                relation.other_kinds,
+            )
+        if k == s:
+            raise Unresolved(f"{noun.words!r} cannot be {pred.relation.replace('_', ' ')} itself", noun.words)
+        out.append(k)
+    return out
+
+
+def _kinds(kinds: tuple[str, ...]) -> str:
+    words = [PLURALS[k] if k != "block" else "the block" for k in kinds]
+    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
+
+
+def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...]:
+    """The goal's clauses: a passing "held" left out where a later clause puts the object
+    somewhere ("pick up the ball and put it on the block" ends with the ball on the block),
+    each clause once, and none said both ways."""
+    kept: list[Clause] = []
+    for i, (clause, passing) in enumerate(said):
+        later = {c.fact.subject for c, _ in said[i + 1 :] if c.fact.relation != "held"}
+        if passing and clause.fact.subject in later:
+            continue
+        if clause not in kept:
+            kept.append(clause)
+    for c in kept:
+        places = {
+            d.fact.other for d in kept if d.fact == replace(c.fact, other=d.fact.other) and not d.negated
+        }
+        if c.fact.relation in ("on", "on_end") and not c.negated and len(places) > 1:
+            # an object rests on one thing: a parse that reads two hosts misread the sentence
+            raise Unresolved(f"{_listed(state, [c.fact.subject])} cannot be on two things at once")
+        if Clause(c.fact, not c.negated) in kept:
+            subject = _listed(state, [c.fact.subject])
+            raise Unresolved(f"it says both that {subject} is {SAID[c.fact.relation]} and that it is not")
+    return tuple(kept)
+
+
+def understand(text: str, state: State) -> tuple[Clause, ...]:
+    """The clauses `text` says of `state`: every parse resolved in the scene; those that fail
+    left out; of the rest, those that use a relative reference to pick out an object that is
+    the only one of its kind anyway are less likely meant. grammar.Unread, Unresolved (the
+    first parse's failure when none resolves) or Ambiguous."""
+    readings = grammar.read(text)
+    found: list[tuple[tuple[Clause, ...], int]] = []
+    failed: list[Unresolved] = []
+    for items in readings:
+        try:
+            found.append(clauses_of(items, state))
+        except Unresolved as e:
+            failed.append(e)
+    if not found:
+        raise failed[0]
+    tightest = min(loose for _, loose in found)
+    distinct = list(dict.fromkeys(c for c, loose in found if loose == tightest))
+    if len(distinct) > 1:
+        raise Ambiguous(distinct)
+    return distinct[0]

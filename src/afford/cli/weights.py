@@ -124,6 +124,8 @@ EXPORTS: dict[str, Callable[[Path], dict]] = {
     "recognition": _recognition,
     "prediction": _prediction,
     "agreement": lambda run: {},
+    "dynamics": lambda run: {},
+    "perception": lambda run: {},
 }
 
 

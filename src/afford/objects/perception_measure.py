@@ -62,6 +62,9 @@ def measure_perception(
         items = [items[i] for i in np.linspace(0, len(items) - 1, limit).astype(int)]
     visible = found = spurious = kind_right = posture_n = posture_right = held_right = 0
     px_err, mm_err, ious, tilt_err = [], [], [], []
+    # Per true posture and per kind: where the shares above are lost.
+    by_posture = {name: [0, 0] for name in ("upright", "tipped", "lying")}
+    by_kind = {kind: [0, 0] for kind in KINDS}
     seconds = 0.0
     for start in range(0, len(items), SPEED_BATCH):
         chunk = items[start : start + SPEED_BATCH]
@@ -75,6 +78,9 @@ def measure_perception(
             pairs = match(objects, poses, mask)
             vis = [k for k in range(N_SLOTS) if not np.isnan(poses[k, 0]) and (mask == k).sum() >= VISIBLE_PX]
             visible += len(vis)
+            for k in vis:
+                by_kind[KINDS[SLOT_KIND[k]]][0] += 1
+                by_kind[KINDS[SLOT_KIND[k]]][1] += k in pairs
             found += len(pairs)
             spurious += len(objects) - len(pairs)
             held_seen = -1
@@ -88,7 +94,10 @@ def measure_perception(
                 up, along = quat_axes(poses[slot, 3:7].astype(float))
                 if KINDS[SLOT_KIND[slot]] != "ball":
                     posture_n += 1
-                    posture_right += o.posture == posture(float(up[2]))
+                    true_posture = posture(float(up[2]))
+                    posture_right += o.posture == true_posture
+                    by_posture[true_posture][0] += 1
+                    by_posture[true_posture][1] += o.posture == true_posture
                 if KINDS[SLOT_KIND[slot]] == "block":
                     tilt_err.append(
                         abs(
@@ -110,6 +119,8 @@ def measure_perception(
         "position_p95_px": float(np.percentile(px, 95)) if len(px) else None,
         "position_median_mm": float(np.median(mm_err)) if mm_err else None,
         "posture_right": posture_right / max(posture_n, 1),
+        "posture_right_by_truth": {k: {"n": n, "right": r / max(n, 1)} for k, (n, r) in by_posture.items()},
+        "found_by_kind": {k: {"n": n, "found": f / max(n, 1)} for k, (n, f) in by_kind.items()},
         "block_tilt_median_deg": float(np.median(tilt_err)) if tilt_err else None,
         "mask_iou_mean": float(np.mean(ious)) if ious else None,
         "held_right": held_right / max(len(items), 1),
@@ -125,11 +136,16 @@ def perception_table(r: dict) -> str:
         ("images", f"{r['images']}"),
         ("visible objects", f"{r['visible_objects']}"),
         ("found", f("found", 4)),
+        *((f"  {k}s (n {v['n']})", f"{v['found']:.4f}") for k, v in r.get("found_by_kind", {}).items()),
         ("spurious per image", f("spurious_per_image", 3)),
         ("kind right", f("kind_right", 4)),
         ("position median / p95 (px)", f"{f('position_median_px', 2)} / {f('position_p95_px', 2)}"),
         ("position median (mm, 3D)", f("position_median_mm", 1)),
         ("upright / tipped / lying right", f("posture_right", 4)),
+        *(
+            (f"  of the {k} (n {v['n']})", f"{v['right']:.4f}")
+            for k, v in r.get("posture_right_by_truth", {}).items()
+        ),
         ("block tilt median error (deg)", f("block_tilt_median_deg", 2)),
         ("mask IoU (mean)", f("mask_iou_mean", 4)),
         ("held object right", f("held_right", 4)),

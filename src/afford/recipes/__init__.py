@@ -29,10 +29,10 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from afford.errors import UserError
-from afford.recipes.registry import RECIPES, RECIPES_PENDING, Recipe
+from afford.recipes.registry import RECIPES, Recipe
 from afford.recipes.stages import BY_NAME, KINDS, MADE, STAGES, Stage
 
-__all__ = ["BY_NAME", "KINDS", "MADE", "RECIPES", "RECIPES_PENDING", "STAGES", "Recipe", "Stage"]
+__all__ = ["BY_NAME", "KINDS", "MADE", "RECIPES", "STAGES", "Recipe", "Stage"]
 
 STAMPS = Path("runs/stamps")
 RECORD_KEY = "recipe"  # the safetensors metadata key beside the checkpoint's own "afford" record

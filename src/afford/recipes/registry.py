@@ -1,7 +1,6 @@
 """The recipe of every shipped weights file: which stages (stages.py) make it, and what is known.
 
-One entry per file under `weights/`; the object world model's files get theirs here too (see
-RECIPES_PENDING below).
+One entry per file under `weights/`.
 """
 
 from __future__ import annotations
@@ -132,12 +131,20 @@ RECIPES: dict[str, Recipe] = {
                 "later prediction net",
             ),
         ),
+        Recipe(
+            "objects/dynamics.safetensors",
+            "the object world model's dynamics: an interaction network per affordance type over the "
+            "objects, K outcomes with their probabilities",
+            ("data-poses", "train-dynamics", "export-dynamics"),
+            trained="train-dynamics",
+            commit="PENDING",
+        ),
+        Recipe(
+            "objects/perception.safetensors",
+            "the object world model's perception: the objects in one RGBD state image",
+            ("data-objects-train", "train-perception", "export-perception"),
+            trained="train-perception",
+            commit="PENDING",
+        ),
     )
 }
-
-# HOOK for the object world model's nets: their files may ship before their recipes are written
-# here. Files under these folders need no entry in RECIPES (tests/test_recipes.py's coverage test
-# skips them, and checks any entry they have); once `objects/perception.safetensors` and
-# `objects/dynamics.safetensors` have entries here and their stages in stages.STAGES, remove the
-# folder from this tuple.
-RECIPES_PENDING: tuple[str, ...] = ("objects/",)

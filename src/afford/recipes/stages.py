@@ -310,6 +310,49 @@ STAGES: tuple[Stage, ...] = (
         None,
         "float16; how the file was first written is not recorded",
     ),
+    # The object world model (afford.objects): its datasets have seeds of their own.
+    _stage(
+        "data-poses",
+        "data",
+        "afford generate --out data/poses --sequences 6000 --seed 100 --poses-only --workers 2",
+        16,
+        "poses, held objects and the arm's path, no images: 20,872 executions, what the dynamics learn from",
+    ),
+    _stage(
+        "data-objects-train",
+        "data",
+        "afford generate --out data/objects-train --sequences 2000 --seed 201 --masks --workers 2",
+        10,
+        "images with their instance masks: what perception learns from",
+    ),
+    _stage(
+        "train-dynamics",
+        "train",
+        "afford train dynamics --data data/poses --out runs/dynamics",
+        7,
+        "the cpu preset: 4,000 batches of 256 executions",
+    ),
+    _stage(
+        "export-dynamics",
+        "export",
+        f"afford weights export objects/dynamics.safetensors --run runs/dynamics --out {MADE}",
+        None,
+        "float16",
+    ),
+    _stage(
+        "train-perception",
+        "train",
+        "afford train perception --data data/objects-train --out runs/perception --steps 6000",
+        36,
+        "the cpu preset, trained twice as long as its 3,000 batches",
+    ),
+    _stage(
+        "export-perception",
+        "export",
+        f"afford weights export objects/perception.safetensors --run runs/perception --out {MADE}",
+        None,
+        "float16",
+    ),
 )
 
 BY_NAME: dict[str, Stage] = {s.name: s for s in STAGES}

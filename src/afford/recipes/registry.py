@@ -137,14 +137,14 @@ RECIPES: dict[str, Recipe] = {
             "objects, K outcomes with their probabilities",
             ("data-poses", "train-dynamics", "export-dynamics"),
             trained="train-dynamics",
-            commit="PENDING",
+            commit="6eb9086",
         ),
         Recipe(
             "objects/perception.safetensors",
             "the object world model's perception: the objects in one RGBD state image",
             ("data-objects-train", "train-perception", "export-perception"),
             trained="train-perception",
-            commit="PENDING",
+            commit="6eb9086",
         ),
     )
 }

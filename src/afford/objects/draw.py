@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from afford.objects.state import KINDS, N_SLOTS, SLOT_KIND
-from afford.sim.arm import finger_fraction
+from afford.sim.arm import GRIP_HALF_WIDTH, finger_fraction
 from afford.sim.scene import ObjectSpec, Scene
 
 CHANGED = 1e-6  # a pixel whose drawings differ by more than this in any channel changed
@@ -46,7 +46,9 @@ class Drawer:
             counts[kind] += 1
         s = self.scene
         s.reset(specs, settle=False, check=False)
-        if held >= 0 and held in names:
+        # A held slot of a kind the gripper cannot hold (the dynamics may say so of a support)
+        # is drawn as the arm at rest, open: what the gripper can show.
+        if held >= 0 and names.get(held) in GRIP_HALF_WIDTH:
             s.set_arm(s.home_q, finger_fraction(names[held]))
             import mujoco
 

@@ -23,6 +23,7 @@ from afford.sim.arm import GRIP_HALF_WIDTH, finger_fraction
 from afford.sim.scene import ObjectSpec, Scene
 
 CHANGED = 1e-6  # a pixel whose drawings differ by more than this in any channel changed
+WIDEN_PX = 2  # eq. (3)'s mask grown by this many pixels
 
 
 class Drawer:
@@ -58,4 +59,18 @@ class Drawer:
     def draw(self, image: np.ndarray, drawn_now: np.ndarray, drawn_next: np.ndarray) -> np.ndarray:
         """The next state image: `image` where the two drawings agree, the next drawing elsewhere."""
         changed = np.abs(drawn_next - drawn_now).max(-1) > CHANGED
+        # A perceived pose is off by a pixel or so, so the drawing of the object where it was
+        # misses a rim of the real one; widening the mask takes that rim with it.
+        for _ in range(WIDEN_PX):
+            changed = _widen(changed)
         return np.where(changed[..., None], drawn_next, image).astype(np.float32)
+
+
+def _widen(mask: np.ndarray) -> np.ndarray:
+    """The mask and its 4-neighbours."""
+    out = mask.copy()
+    out[1:] |= mask[:-1]
+    out[:-1] |= mask[1:]
+    out[:, 1:] |= mask[:, :-1]
+    out[:, :-1] |= mask[:, 1:]
+    return out

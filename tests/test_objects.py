@@ -234,3 +234,55 @@ def test_a_shard_without_masks_in_a_masked_dataset_is_made_again(tmp_path):
     report = generate(root, config, progress=False)
     assert len(report.remade) == 1 and "no instance masks" in report.remade[0]
     assert Dataset(root).sequence(0).masks is not None
+
+
+def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
+    from afford.objects.perception import HEADS, NO_POSTURE, PerceptionNet, loss, targets
+    from afford.objects.perception import PRESETS as SEEING
+    from afford.objects.perception_train import batch_of, states_of
+    from afford.objects.state import POSTURES, SLOT_KIND
+
+    root = tmp_path / "m"
+    generate(root, GenerateConfig(sequences=2, seed=3, workers=1, shard_size=2, masks=True), progress=False)
+    data = Dataset(root)
+    config = SEEING["tiny"]
+    images, t = batch_of(data, states_of(data, None)[:4], config)
+    net = PerceptionNet(config)
+    out = net(images)
+    assert {k: v.shape[1] for k, v in out.items()} == HEADS
+    # posture is a class on the pixels of cups, supports and the block, and on no others
+    seq = data.sequence(0)
+    masks = seq.masks[:1]
+    t0 = targets(masks, seq.poses[:1], seq.held[:1], config.sigma_px)
+    ball = np.isin(masks[0], np.flatnonzero(SLOT_KIND == 1))
+    assert (t0["posture"][0][torch.from_numpy(ball)] == NO_POSTURE).all()
+    objects = (masks[0] >= 0) & ~ball
+    assert objects.any() and (t0["posture"][0][torch.from_numpy(objects)] < len(POSTURES)).all()
+    assert (t0["posture"][0][torch.from_numpy(masks[0] < 0)] == NO_POSTURE).all()
+    torch.manual_seed(0)
+    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+    first = first_posture = None
+    for _ in range(30):
+        total, parts = loss(net(images), t)
+        opt.zero_grad()
+        total.backward()
+        assert all(p.grad is not None for p in net.parameters() if p.requires_grad)
+        opt.step()
+        first = first if first is not None else float(total.detach())
+        first_posture = first_posture if first_posture is not None else parts["posture"]
+    assert float(total) < 0.8 * first and parts["posture"] < first_posture
+
+
+@pytest.mark.parametrize("name", ["upright", "tipped", "lying"])
+def test_an_up_axis_is_made_to_agree_with_a_posture(name):
+    from afford.objects.state import fit_posture, posture
+
+    for up in ([0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.1, 0.99, 0.05], [0.5, 0.5, -0.7]):
+        fitted = fit_posture(np.array(up), name)
+        assert posture(float(fitted[2])) == name
+        assert np.isclose(np.linalg.norm(fitted), 1.0)
+        if posture(float(np.array(up)[2] / np.linalg.norm(up))) == name:  # agrees: kept
+            np.testing.assert_allclose(fitted, np.array(up) / np.linalg.norm(up))
+        elif name != "upright" and np.linalg.norm(up[:2]) > 0:  # its direction over the table kept
+            flat = np.array(up[:2]) / np.linalg.norm(up[:2])
+            np.testing.assert_allclose(fitted[:2] / np.linalg.norm(fitted[:2]), flat, atol=1e-9)

@@ -16,7 +16,16 @@ from torch.nn import functional as F
 
 from afford.errors import UserError
 from afford.objects.perception import AXIS_PAIRS, OFFSET_SCALE, PerceptionNet
-from afford.objects.state import KINDS, N_SLOTS, POS_SCALE, SLOT_KIND, axes_quat, posture
+from afford.objects.state import (
+    KINDS,
+    N_SLOTS,
+    POS_SCALE,
+    POSTURES,
+    SLOT_KIND,
+    axes_quat,
+    fit_posture,
+    posture,
+)
 from afford.sim.camera import FOCAL_PX, SIZE
 from afford.sim.constants import CAMERA
 
@@ -103,6 +112,8 @@ def _objects(
             pixel = np.median(votes[mine], 0)
             z = float(out["z"][0, r, q].mean()) / POS_SCALE
             up = out["up"][:, r, q].mean(1)
+            if kind != "ball":  # the posture head decides the band; the up axis, the direction
+                up = fit_posture(up, POSTURES[int(out["posture"][:, r, q].mean(1).argmax())])
             up = up / max(np.linalg.norm(up), 1e-9)
             product = np.zeros((3, 3))
             for value, (a, b) in zip(out["along"][:, r, q].mean(1), AXIS_PAIRS, strict=True):

@@ -105,3 +105,24 @@ def posture(up_z: float) -> str:
     if abs(up_z) <= LYING_COS:
         return "lying"
     return "tipped"
+
+
+# Where an up axis is put when the perception net's posture class disagrees with it: the
+# middle of that posture's band of angles from vertical.
+POSTURE_COS = {"upright": 1.0, "tipped": float(np.cos(np.radians(45))), "lying": 0.0}
+
+
+def fit_posture(up: np.ndarray, name: str) -> np.ndarray:
+    """A unit up axis made to agree with posture `name`: unchanged if it already does, else
+    tilted to the middle of that posture's band, keeping its horizontal direction (and its
+    sign, so an upside-down tipped axis stays below the horizon)."""
+    up = up / max(float(np.linalg.norm(up)), 1e-9)
+    if posture(float(up[2])) == name:
+        return up
+    flat = np.array([up[0], up[1], 0.0])
+    if np.linalg.norm(flat) < 1e-6:  # no horizontal direction to keep: any serves
+        flat = np.array([1.0, 0.0, 0.0])
+    flat /= np.linalg.norm(flat)
+    c = POSTURE_COS[name]
+    sign = -1.0 if up[2] < 0 and name == "tipped" else 1.0
+    return flat * np.sqrt(1 - c * c) + np.array([0.0, 0.0, sign * c])

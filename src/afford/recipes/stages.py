@@ -342,9 +342,9 @@ STAGES: tuple[Stage, ...] = (
     _stage(
         "train-perception",
         "train",
-        "afford train perception --data data/objects-train --out runs/perception --steps 6000",
-        36,
-        "the cpu preset, trained twice as long as its 3,000 batches",
+        "afford train perception --data data/objects-train --out runs/perception",
+        48,
+        "the cpu preset: 8,000 batches of 16 images",
     ),
     _stage(
         "export-perception",

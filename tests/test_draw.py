@@ -48,6 +48,26 @@ def test_a_shifted_ball_is_drawn_where_it_went_and_nothing_else_changes(drawer, 
     np.testing.assert_array_equal(drawn[cup_pixels], image[cup_pixels])  # the cup untouched
 
 
+def test_a_moved_object_seen_off_its_pose_leaves_nothing_behind(drawer, scene):
+    scene.reset([ObjectSpec.upright("ball", -0.05, 0.3), ObjectSpec.upright("cup", 0.12, 0.22)])
+    image = scene.observe()
+    ball = [name for name, _ in scene.slots].index("ball0")
+    real = scene.instance_mask() == ball
+    poses, held = state_of(scene)
+    perceived = poses.copy()
+    perceived[ball, 0] += 0.015  # seen 3 px off where it is, more than the mask's widening
+    away = perceived.copy()
+    away[ball, 0] += 0.08
+    now, after = drawer.render(perceived, held), drawer.render(away, held)
+    # from the drawings alone, a rim of the real ball stays where it was
+    assert np.abs(drawer.draw(image, now, after)[real] - after[real]).max() > 0.1
+    # with the pixels the ball was seen in, every one of them shows the next state
+    drawn = drawer.draw(image, now, after, seen=real)
+    np.testing.assert_array_equal(drawn[real], after[real])
+    cup_pixels = scene.instance_mask() == [n for n, _ in scene.slots].index("cup0")
+    np.testing.assert_array_equal(drawn[cup_pixels], image[cup_pixels])
+
+
 def test_an_object_moved_under_another_stays_hidden(drawer, scene):
     # The block rests on a support at one end; its other end overhangs the table.
     specs = [

@@ -56,9 +56,20 @@ class Drawer:
             mujoco.mj_forward(s.model, s.data)
         return s.observe()
 
-    def draw(self, image: np.ndarray, drawn_now: np.ndarray, drawn_next: np.ndarray) -> np.ndarray:
-        """The next state image: `image` where the two drawings agree, the next drawing elsewhere."""
+    def draw(
+        self,
+        image: np.ndarray,
+        drawn_now: np.ndarray,
+        drawn_next: np.ndarray,
+        seen: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The next state image: `image` where the two drawings agree, the next drawing elsewhere.
+        `seen` (H, W) bool: pixels where `image` still shows the moved objects as they were
+        perceived; they are redrawn too, since a drawing at a perceived pose misses what the
+        pose is off by."""
         changed = np.abs(drawn_next - drawn_now).max(-1) > CHANGED
+        if seen is not None:
+            changed |= seen
         # A perceived pose is off by a pixel or so, so the drawing of the object where it was
         # misses a rim of the real one; widening the mask takes that rim with it.
         for _ in range(WIDEN_PX):

@@ -137,17 +137,36 @@ def _objects(
     return objects
 
 
+def by_slot(objects: list[SeenObject]) -> list[SeenObject | None]:
+    """Perceived objects in the dynamics' slots (None: empty). Each kind's objects fill that
+    kind's slots, the most confident first; the dynamics treat slots of one kind alike, so
+    which goes where is free."""
+    slots: list[SeenObject | None] = [None] * N_SLOTS
+    for k, kind in enumerate(KINDS):
+        mine = sorted((o for o in objects if o.kind == kind), key=lambda o: -o.score)
+        for slot, o in zip(np.flatnonzero(SLOT_KIND == k), mine, strict=False):
+            slots[slot] = o
+    return slots
+
+
 def to_state(objects: list[SeenObject]) -> tuple[np.ndarray, int]:
     """Perceived objects as a state the dynamics take: pose rows (slots, 7) (NaN: no object
-    there) and the held slot (-1: none). Each kind's objects fill that kind's slots, the most
-    confident first; the dynamics treat slots of one kind alike, so which goes where is free."""
+    there) and the held slot (-1: none), the slots filled as `by_slot` fills them."""
     poses = np.full((N_SLOTS, 7), np.nan, np.float32)
     held, best = -1, 0.5
-    for k, kind in enumerate(KINDS):
-        slots = [s for s in range(N_SLOTS) if SLOT_KIND[s] == k]
-        mine = sorted((o for o in objects if o.kind == kind), key=lambda o: -o.score)
-        for slot, o in zip(slots, mine, strict=False):
-            poses[slot] = np.concatenate([o.position, o.quat])
-            if o.held > best:
-                held, best = slot, o.held
+    for slot, o in enumerate(by_slot(objects)):
+        if o is None:
+            continue
+        poses[slot] = np.concatenate([o.position, o.quat])
+        if o.held > best:
+            held, best = slot, o.held
     return poses, held
+
+
+def slot_masks(objects: list[SeenObject]) -> np.ndarray:
+    """(slots, H, W) bool: the pixels each slot's object was seen in (none for an empty slot)."""
+    masks = np.zeros((N_SLOTS, SIZE, SIZE), bool)
+    for slot, o in enumerate(by_slot(objects)):
+        if o is not None:
+            masks[slot] = o.mask
+    return masks

@@ -15,8 +15,9 @@ import torch
 from afford.images import to_chw, to_hwc
 from afford.objects.draw import Drawer
 from afford.objects.dynamics import ObjectDynamics, predict
-from afford.objects.perceive import perceive, to_state
+from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
+from afford.objects.state import moved
 
 
 class ObjectRollout:
@@ -29,17 +30,23 @@ class ObjectRollout:
         start = to_hwc(images)
         rows = actions.numpy()
         b, length = rows.shape[:2]
-        states = [to_state(objects) for objects in perceive(self.perception, start)]
+        seen = perceive(self.perception, start)
+        states = [to_state(objects) for objects in seen]
+        masks = np.stack([slot_masks(objects) for objects in seen])  # (B, slots, H, W)
+        as_seen = masks.any((2, 3))  # slots the image shows as seen: not yet moved
         poses = np.stack([p for p, _ in states])
         held = np.array([h for _, h in states])
         drawn = [self.drawer.render(poses[k], int(held[k])) for k in range(b)]
         image = list(start)
         out = np.zeros((b, length, *start.shape[1:]), np.float32)
         for t in range(length):
+            before = poses
             poses, held = predict(self.dynamics, poses, held, rows[:, t]).likeliest()
+            go = moved(before, poses)
             for k in range(b):
                 after = self.drawer.render(poses[k], int(held[k]))
-                image[k] = self.drawer.draw(image[k], drawn[k], after)
+                image[k] = self.drawer.draw(image[k], drawn[k], after, masks[k][go[k] & as_seen[k]].any(0))
                 drawn[k] = after
                 out[k, t] = image[k]
+            as_seen &= ~go
         return to_chw(out)

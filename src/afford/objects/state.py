@@ -86,6 +86,13 @@ def slot_features(poses: np.ndarray, held: np.ndarray) -> tuple[np.ndarray, np.n
     return (f * present[..., None]).astype(np.float32), present
 
 
+def moved(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """(..., slots) bool: the objects whose pose rows differ (one appearing or going counts).
+    The dynamics copy a still object's row exactly, so equality is the test."""
+    same = (before == after) | (np.isnan(before) & np.isnan(after))
+    return ~same.all(-1)
+
+
 def uprightness(poses: np.ndarray) -> np.ndarray:
     """(..., slots) the z component of each object's up axis: 1 upright, 0 lying, -1 upside down."""
     up, _ = quat_axes(np.nan_to_num(poses[..., 3:7]))

@@ -16,8 +16,9 @@ import numpy as np
 
 from afford.objects.draw import Drawer
 from afford.objects.dynamics import ObjectDynamics, predict
-from afford.objects.perceive import perceive, to_state
+from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
+from afford.objects.state import moved
 from afford.planning.learned import recognise_nodes
 from afford.planning.tree import Node, Recognised, WorldModel
 from afford.recognition.infer import Recognizer
@@ -27,12 +28,14 @@ from afford.sim.affordances import Affordance
 
 @dataclass
 class ObjectsState:
-    """A node's objects: pose rows per slot (NaN: none), the held slot, and the drawing of
-    them that the child's drawing is compared with."""
+    """A node's objects: pose rows per slot (NaN: none), the held slot, the drawing of them
+    that the child's drawing is compared with, and which slots' objects the image still
+    shows as they were seen in the start image (not yet moved, so not yet redrawn)."""
 
     poses: np.ndarray
     held: int
     drawn: np.ndarray
+    as_seen: np.ndarray
 
 
 class ObjectsModel(WorldModel):
@@ -53,8 +56,10 @@ class ObjectsModel(WorldModel):
         self.drawer = drawer if drawer is not None else Drawer()
 
     def root(self):
-        poses, held = to_state(perceive(self.perception, self.image[None])[0])
-        return self.image, ObjectsState(poses, held, self.drawer.render(poses, held))
+        objects = perceive(self.perception, self.image[None])[0]
+        poses, held = to_state(objects)
+        self.seen = slot_masks(objects)
+        return self.image, ObjectsState(poses, held, self.drawer.render(poses, held), self.seen.any((1, 2)))
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
         return recognise_nodes(self.recognizer, nodes)
@@ -67,6 +72,8 @@ class ObjectsModel(WorldModel):
         out = []
         for k, parent in enumerate(parents):
             drawn = self.drawer.render(poses[k], int(held_next[k]))
-            image = self.drawer.draw(parent.image, parent.state.drawn, drawn)
-            out.append((image, ObjectsState(poses[k], int(held_next[k]), drawn)))
+            go = moved(before[k], poses[k])
+            seen = self.seen[go & parent.state.as_seen].any(0)
+            image = self.drawer.draw(parent.image, parent.state.drawn, drawn, seen)
+            out.append((image, ObjectsState(poses[k], int(held_next[k]), drawn, parent.state.as_seen & ~go)))
         return out

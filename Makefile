@@ -39,8 +39,10 @@ demo: install
 		|| echo "the learned plan missed the goal: see out/plan/"
 
 # Two processes: most tests wait on one core (MuJoCo, a subprocess's start-up), so two share the machine well.
+# Each runs torch on one thread (tests/conftest.py), and OpenMP threads that wait sleep rather
+# than spin: two processes spinning for two cores each made torch ten times slower.
 test: install $(CLUSTER)
-	$(PY) -m pytest -q -n 2
+	OMP_WAIT_POLICY=PASSIVE $(PY) -m pytest -q -n 2
 
 lint: install
 	$(VENV)/bin/ruff check src tests benchmarks

@@ -1,9 +1,23 @@
+import os
 import sys
 from pathlib import Path
 
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+
+# Under pytest-xdist each worker shares the cores with the others: one torch thread each, set
+# again after every test, since training code sets its config's count.
+ONE_THREAD = bool(os.environ.get("PYTEST_XDIST_WORKER"))
+
+
+@pytest.fixture(autouse=True)
+def _one_torch_thread():
+    if ONE_THREAD:
+        import torch
+
+        torch.set_num_threads(1)
+    yield
 
 
 @pytest.fixture(scope="module")

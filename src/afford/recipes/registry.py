@@ -144,7 +144,7 @@ RECIPES: dict[str, Recipe] = {
             "the object world model's perception: the objects in one RGBD state image",
             ("data-objects-train", "train-perception", "export-perception"),
             trained="train-perception",
-            commit="6eb9086",
+            commit="081328c",
         ),
     )
 }

@@ -3,6 +3,7 @@ encoding, and the dynamics nets at tiny sizes."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import numpy as np
@@ -237,7 +238,14 @@ def test_a_shard_without_masks_in_a_masked_dataset_is_made_again(tmp_path):
 
 
 def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
-    from afford.objects.perception import HEADS, NO_POSTURE, PerceptionNet, loss, targets
+    from afford.objects.perception import (
+        HEADS,
+        NO_POSTURE,
+        PerceptionNet,
+        fold_batch_norms,
+        loss,
+        targets,
+    )
     from afford.objects.perception import PRESETS as SEEING
     from afford.objects.perception_train import batch_of, states_of
     from afford.objects.state import POSTURES, SLOT_KIND
@@ -247,6 +255,7 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     data = Dataset(root)
     config = SEEING["tiny"]
     images, t = batch_of(data, states_of(data, None)[:4], config)
+    torch.manual_seed(0)
     net = PerceptionNet(config)
     out = net(images)
     assert {k: v.shape[1] for k, v in out.items()} == HEADS
@@ -259,7 +268,6 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     objects = (masks[0] >= 0) & ~ball
     assert objects.any() and (t0["posture"][0][torch.from_numpy(objects)] < len(POSTURES)).all()
     assert (t0["posture"][0][torch.from_numpy(masks[0] < 0)] == NO_POSTURE).all()
-    torch.manual_seed(0)
     opt = torch.optim.Adam(net.parameters(), lr=3e-3)
     first = first_posture = None
     for _ in range(30):
@@ -271,6 +279,15 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
         first = first if first is not None else float(total.detach())
         first_posture = first_posture if first_posture is not None else parts["posture"]
     assert float(total) < 0.8 * first and parts["posture"] < first_posture
+    # inference folds each batch norm into its convolution: the same outputs, no norms left
+    net.eval()
+    with torch.no_grad():
+        before = net(images)
+        folded = fold_batch_norms(copy.deepcopy(net))
+        after = folded(images)
+    assert not any(isinstance(m, torch.nn.BatchNorm2d) for m in folded.modules())
+    for key, value in before.items():
+        assert torch.allclose(value, after[key], atol=1e-4), key
 
 
 @pytest.mark.parametrize("name", ["upright", "tipped", "lying"])

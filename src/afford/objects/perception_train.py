@@ -9,7 +9,7 @@ import numpy as np
 import torch
 
 from afford.data.format import DataError, Dataset
-from afford.objects.perception import PerceptionConfig, PerceptionNet, loss, targets
+from afford.objects.perception import PerceptionConfig, PerceptionNet, fold_batch_norms, loss, targets
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 KIND = "perception"
@@ -84,4 +84,4 @@ def load_perception(path: str | Path) -> PerceptionNet:
     from afford.training.checkpoint import load_net_from_checkpoint
 
     net, _, _ = load_net_from_checkpoint(path, KIND, PerceptionConfig, PerceptionNet)
-    return net.to(memory_format=torch.channels_last)
+    return fold_batch_norms(net).to(memory_format=torch.channels_last)

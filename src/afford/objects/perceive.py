@@ -12,10 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
-from torch.nn import functional as F
 
 from afford.errors import UserError
-from afford.objects.perception import AXIS_PAIRS, OFFSET_SCALE, PerceptionNet
+from afford.objects.perception import AXIS_PAIRS, CHANNELS, OFFSET_SCALE, PerceptionNet
 from afford.objects.state import (
     KINDS,
     N_SLOTS,
@@ -75,31 +74,57 @@ def perceive(net: PerceptionNet, images: np.ndarray) -> list[list[SeenObject]]:
     net.eval()
     found = []
     for i in range(0, len(images), BATCH):
-        x = torch.from_numpy(
-            np.ascontiguousarray(images[i : i + BATCH].transpose(0, 3, 1, 2), dtype=np.float32)
-        )
-        out = net(x)
-        heat = torch.sigmoid(out["heat"])
-        peaks = (heat == F.max_pool2d(heat, 3, 1, 1)) & (heat > HEAT_CUT)
-        arrays = {k: v.numpy() for k, v in out.items()}
-        kinds = out["seg"].argmax(1).numpy()
+        # The images are (B, H, W, 4): as (B, 4, H, W) they are already channels-last, the
+        # layout the net runs fastest in, so no copy is made.
+        x = torch.from_numpy(np.asarray(images[i : i + BATCH], dtype=np.float32)).permute(0, 3, 1, 2)
+        out = net.stacked(x)
+        peaks, scores = centre_peaks(out[:, CHANNELS["heat"]], HEAT_CUT)
+        kinds = out[:, CHANNELS["seg"]].argmax(1).numpy()
+        # (B, H, W, C): an object's pixels' outputs are rows gathered in one step.
+        pixels = out.permute(0, 2, 3, 1).numpy()
         for j in range(len(x)):
-            found.append(
-                _objects({k: v[j] for k, v in arrays.items()}, kinds[j], peaks[j].numpy(), heat[j].numpy())
-            )
+            found.append(_objects(pixels[j], kinds[j], peaks[j], scores[j]))
     return found
 
 
+def centre_peaks(logits: torch.Tensor, cut: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The peaks of (B, kinds, H, W) centre-map logits that reach `cut` (a probability): per
+    image, their (kind, row, column) rows and their heights. A peak is at least as high as its
+    eight neighbours. Only the few pixels above the cut are compared with their neighbours: a
+    3 x 3 max pool over every pixel took a sixth of perception's time."""
+    cand = torch.nonzero(logits > float(np.log(cut / (1 - cut))))  # (n, 4): image, kind, row, column
+    image, kind, row, col = cand.T
+    at = logits[image, kind, row, col]
+    # A neighbour off the image's edge is clamped onto the edge: the pixel itself or one of its
+    # true neighbours, so the comparison stays right without padding a copy of every map.
+    h, w = logits.shape[2:]
+    around = torch.stack(
+        [
+            logits[image, kind, (row + dr).clamp(0, h - 1), (col + dc).clamp(0, w - 1)]
+            for dr in (-1, 0, 1)
+            for dc in (-1, 0, 1)
+        ]
+    )
+    keep = at >= around.amax(0)
+    cand, heights = cand[keep].numpy(), torch.sigmoid(at[keep]).numpy()
+    images = range(len(logits))
+    return [cand[cand[:, 0] == i, 1:] for i in images], [heights[cand[:, 0] == i] for i in images]
+
+
 def _objects(
-    out: dict[str, np.ndarray], kind_map: np.ndarray, peaks: np.ndarray, heat: np.ndarray
+    pixels: np.ndarray, kind_map: np.ndarray, peaks: np.ndarray, scores: np.ndarray
 ) -> list[SeenObject]:
+    """One image's objects from its heads' outputs (H, W, C), its kind map, and its centre
+    peaks as (kind, row, column) rows with their heights."""
     objects = []
     for k, kind in enumerate(KINDS):
-        centres = np.argwhere(peaks[k])  # (n, 2) row, column
+        mine = peaks[:, 0] == k
+        centres, heights = peaks[mine, 1:], scores[mine]  # (n, 2) row, column
         rows, cols = np.nonzero(kind_map == k + 1)
         if not len(centres) or not len(rows):
             continue
-        votes = np.stack([cols + 0.5, rows + 0.5], 1) + out["offset"][:, rows, cols].T * OFFSET_SCALE
+        seen = pixels[rows, cols]  # (n, C)
+        votes = np.stack([cols + 0.5, rows + 0.5], 1) + seen[:, CHANNELS["offset"]] * OFFSET_SCALE
         at = centres[:, ::-1] + 0.5  # peaks as (column, row) pixel centres
         dist = np.linalg.norm(votes[:, None] - at[None], axis=-1)
         nearest = dist.argmin(1)
@@ -110,18 +135,19 @@ def _objects(
                 continue
             r, q = rows[mine], cols[mine]
             pixel = np.median(votes[mine], 0)
-            z = float(out["z"][0, r, q].mean()) / POS_SCALE
-            up = out["up"][:, r, q].mean(1)
+            mean = seen[mine].mean(0)  # every head's output, averaged over the object's pixels
+            z = float(mean[CHANNELS["z"]][0]) / POS_SCALE
+            up = mean[CHANNELS["up"]]
             if kind != "ball":  # the posture head decides the band; the up axis, the direction
-                up = fit_posture(up, POSTURES[int(out["posture"][:, r, q].mean(1).argmax())])
+                up = fit_posture(up, POSTURES[int(mean[CHANNELS["posture"]].argmax())])
             up = up / max(np.linalg.norm(up), 1e-9)
             product = np.zeros((3, 3))
-            for value, (a, b) in zip(out["along"][:, r, q].mean(1), AXIS_PAIRS, strict=True):
+            for value, (a, b) in zip(mean[CHANNELS["along"]], AXIS_PAIRS, strict=True):
                 product[a, b] = product[b, a] = value
             along = np.linalg.eigh(product)[1][:, -1]  # the principal axis of along x along
             mask = np.zeros(kind_map.shape, bool)
             mask[r, q] = True
-            held = float(1 / (1 + np.exp(-out["held"][0, r, q])).mean())
+            held = float((1 / (1 + np.exp(-seen[mine][:, CHANNELS["held"]]))).mean())
             objects.append(
                 SeenObject(
                     kind,
@@ -131,7 +157,7 @@ def _objects(
                     along,
                     mask,
                     held,
-                    float(heat[k, centres[c][0], centres[c][1]]),
+                    float(heights[c]),
                 )
             )
     return objects

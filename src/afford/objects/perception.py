@@ -40,6 +40,11 @@ HEADS = {
     "held": 1,
     "posture": len(POSTURES),
 }
+# Each head's channels in the net's stacked output.
+CHANNELS = {
+    name: slice(sum(list(HEADS.values())[:i]), sum(list(HEADS.values())[: i + 1]))
+    for i, name in enumerate(HEADS)
+}
 OFFSET_SCALE = 10.0  # offsets leave the net in tens of pixels
 SEG_WEIGHT = torch.tensor([1.0] + [4.0] * len(KINDS))  # none, then each kind
 AXIS_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the along product's entries
@@ -139,14 +144,16 @@ class PerceptionNet(nn.Module):
         self.refine = ConvBNReLU(w + 6, w // 2, 3)
         self.head = nn.Conv2d(w // 2, sum(HEADS.values()), 1)
         with torch.no_grad():  # centre maps start near 0, as they mostly are (CenterNet's prior)
-            heat = list(HEADS).index("heat")
-            start = sum(list(HEADS.values())[:heat])
-            self.head.bias[start : start + HEADS["heat"]] = -4.0
+            self.head.bias[CHANNELS["heat"]] = -4.0
         ys, xs = torch.meshgrid(torch.linspace(-1, 1, SIZE), torch.linspace(-1, 1, SIZE), indexing="ij")
         self.register_buffer("coords", torch.stack([xs, ys])[None], persistent=False)
 
     def forward(self, images: torch.Tensor) -> dict[str, torch.Tensor]:
         """(B, 4, H, W) RGBD in [0, 1] -> each head's (B, C, H, W) output (raw logits)."""
+        return dict(zip(HEADS, torch.split(self.stacked(images), list(HEADS.values()), dim=1), strict=True))
+
+    def stacked(self, images: torch.Tensor) -> torch.Tensor:
+        """The heads' outputs in one (B, C, H, W) tensor, channels as in CHANNELS."""
         full = torch.cat([images, self.coords.expand(len(images), -1, -1, -1)], 1)
         x = self.stem(full)
         skips = [x]
@@ -158,8 +165,7 @@ class PerceptionNet(nn.Module):
             x = F.interpolate(x, scale_factor=2, mode="nearest")
             x = u(torch.cat([x, skips.pop()], 1))
         x = F.interpolate(x, scale_factor=2, mode="bilinear", align_corners=False)
-        out = self.head(self.refine(torch.cat([x, full], 1)))
-        return dict(zip(HEADS, torch.split(out, list(HEADS.values()), dim=1), strict=True))
+        return self.head(self.refine(torch.cat([x, full], 1)))
 
 
 # ---------------------------------------------------------------------------- targets

@@ -51,7 +51,7 @@ class DynamicsConfig:
     outcomes: int = 2  # K: where one start can go two ways
     arm_path: bool = False  # the arm's key points as an input
     # training
-    steps: int = 4000
+    steps: int = 16000  # side-effect landings kept improving to here (docs/experiments)
     batch: int = 256
     lr: float = 1e-3
     warmup: int = 200

@@ -135,9 +135,16 @@ RECIPES: dict[str, Recipe] = {
             "objects/dynamics.safetensors",
             "the object world model's dynamics: an interaction network per affordance type over the "
             "objects, K outcomes with their probabilities",
-            ("data-poses", "train-dynamics", "export-dynamics"),
+            (
+                "data-poses",
+                "data-poses-102",
+                "data-poses-103",
+                "data-poses-effects",
+                "train-dynamics",
+                "export-dynamics",
+            ),
             trained="train-dynamics",
-            commit="6eb9086",
+            commit="3301a27",
         ),
         Recipe(
             "objects/perception.safetensors",

@@ -315,8 +315,30 @@ STAGES: tuple[Stage, ...] = (
         "data-poses",
         "data",
         "afford generate --out data/poses --sequences 6000 --seed 100 --poses-only --workers 2",
-        16,
-        "poses, held objects and the arm's path, no images: 20,872 executions, what the dynamics learn from",
+        7,
+        "poses, held objects and the arm's path, no images: about 20,900 executions",
+    ),
+    _stage(
+        "data-poses-102",
+        "data",
+        "afford generate --out data/poses-102 --sequences 6000 --seed 102 --poses-only --workers 2",
+        7,
+        "as data/poses, another seed: the dynamics learn from three such sets",
+    ),
+    _stage(
+        "data-poses-103",
+        "data",
+        "afford generate --out data/poses-103 --sequences 6000 --seed 103 --poses-only --workers 2",
+        7,
+        "as data/poses, a third seed",
+    ),
+    _stage(
+        "data-poses-effects",
+        "data",
+        "afford generate --out data/poses-effects --sequences 1200 --seed 101 --poses-only --actions effects "
+        "--workers 2",
+        8,
+        "poses of executions that seek side effects: about 4,200 executions",
     ),
     _stage(
         "data-objects-train",
@@ -328,9 +350,10 @@ STAGES: tuple[Stage, ...] = (
     _stage(
         "train-dynamics",
         "train",
-        "afford train dynamics --data data/poses --out runs/dynamics",
-        7,
-        "the cpu preset: 4,000 batches of 256 executions",
+        "afford train dynamics --data data/poses --more-data data/poses-102 --more-data data/poses-103 "
+        "--more-data data/poses-effects --out runs/dynamics",
+        19,
+        "the cpu preset: 16,000 batches of 256 executions, from about 64,400",
     ),
     _stage(
         "export-dynamics",

@@ -41,7 +41,8 @@ def read(items: list[str]) -> list[Point]:
         if not count.isdigit() or not Path(path).is_file():
             raise UserError(f"{item!r}: expected [SERIES:]EXECUTIONS=FILE.json of an existing report")
         points.append(Point(series or "nets", int(count), json.loads(Path(path).read_text())))
-    return sorted(points, key=lambda p: (p.series, p.executions))
+    order = {name: i for i, name in enumerate(dict.fromkeys(p.series for p in points))}
+    return sorted(points, key=lambda p: (order[p.series], p.executions))  # series as given
 
 
 def median(point: Point, kind: str) -> float:

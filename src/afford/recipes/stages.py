@@ -352,7 +352,7 @@ STAGES: tuple[Stage, ...] = (
         "train",
         "afford train dynamics --data data/poses --more-data data/poses-102 --more-data data/poses-103 "
         "--more-data data/poses-effects --out runs/dynamics",
-        19,
+        17,
         "the cpu preset: 16,000 batches of 256 executions, from about 64,400",
     ),
     _stage(

@@ -114,3 +114,23 @@ def test_the_shipped_continuous_turn_net_predicts_the_goal_angle_best():
     losses = task.goal.loss_torch(ends).numpy()
     best = angles[int(losses.argmin())]
     assert abs((best - 30 + 90) % 180 - 90) <= 20, (best, losses.round(4))
+
+
+def test_a_world_model_without_gradients_has_its_turn_searched_on_a_grid():
+    from afford.planning.angles import with_searched_turns
+    from afford.planning.tree import Node, SearchResult
+
+    model = DialModel()
+    goal = Goal(blob(torch.tensor(-35.0)).numpy().transpose(1, 2, 0).copy())
+    root = Node((), model.image, None)
+    nodes = [root]
+    for a in (turn(90.0), turn(-90.0)):
+        image, state = model.predict([root], [a])[0]
+        nodes.append(Node((a,), image, state, parent=0))
+    for n in nodes:
+        n.loss = float(goal.loss(n.image[None])[0])
+    searched = SearchResult(nodes, 2, 0.0, 1, [1, 2])
+    r = with_searched_turns(searched, model, goal)
+    assert len(r.plan) == 1 and r.plan[0].turn == -35.0 and r.loss < searched.loss
+    assert [n.depth for n in r.path()] == [0, 1]
+    assert with_searched_turns(searched, model, Goal(goal.patch, negative=True)) is searched

@@ -126,3 +126,55 @@ def with_optimised_turns(result: SearchResult, model, goal: Goal) -> SearchResul
         nodes[-1].loss, at = float(goal.loss(image[None])[0]), len(nodes) - 1
     seconds = result.seconds + time.perf_counter() - t0
     return SearchResult(nodes, at, seconds, result.expanded, result.per_depth, result.truncated)
+
+
+GRID_DEG = 5.0  # the angle grid a non-differentiable world model's turns are searched on
+
+
+def with_searched_turns(result: SearchResult, model, goal: Goal, step_deg: float = GRID_DEG) -> SearchResult:
+    """`with_optimised_turns` for a world model that cannot be differentiated (the object world
+    model draws with a renderer): the grown plan with turns that comes closest to the goal has
+    each of its turns, one after another, tried at every `step_deg` from -180 to 180, the rest
+    held; the angle whose predicted last state scores best by eq. (5) is kept. Its dynamics
+    take the angle as an input, so no second net is needed. `model`: any WorldModel."""
+    with_turn = [i for i, n in enumerate(result.nodes) if any(a.turn for a in n.plan)]
+    if goal.negative or not with_turn:
+        return result
+    t0 = time.perf_counter()
+    node = result.nodes[with_turn[goal.best(np.array([result.nodes[i].loss for i in with_turn]))]]
+    root = result.nodes[0]
+    grid = [float(a) for a in np.arange(-180.0, 180.0 + 1e-9, step_deg) if abs(a) > 1e-9]
+    plan, best_loss = node.plan, float(node.loss)
+    for i in [k for k, a in enumerate(node.plan) if a.turn]:
+        plans = [plan[:i] + (plan[i].with_turn(angle),) + plan[i + 1 :] for angle in grid]
+        losses = goal.loss(np.stack([steps[-1][0] for steps in _rolled_out(model, root, plans)]))
+        k = goal.best(losses)
+        if losses[k] < best_loss:
+            plan, best_loss = plans[k], float(losses[k])
+    if best_loss >= result.loss:
+        result.seconds += time.perf_counter() - t0  # the search counts as planning time
+        return result
+    nodes, at = list(result.nodes), 0
+    for a, (image, state) in zip(plan, _rolled_out(model, root, [plan])[0], strict=True):
+        nodes.append(Node(nodes[at].plan + (a,), image, state, parent=at))
+        nodes[-1].loss, at = float(goal.loss(image[None])[0]), len(nodes) - 1
+    seconds = result.seconds + time.perf_counter() - t0
+    return SearchResult(nodes, at, seconds, result.expanded, result.per_depth, result.truncated)
+
+
+def _rolled_out(
+    model, root: Node, plans: list[tuple[Affordance, ...]]
+) -> list[list[tuple[np.ndarray, object]]]:
+    """Per plan (all of one length), (image, state) after each of its steps, predicted by
+    `model` from `root`; each step of every plan in one call."""
+    nodes = [root] * len(plans)
+    out: list[list[tuple[np.ndarray, object]]] = [[] for _ in plans]
+    for t in range(len(plans[0])):
+        children = model.predict(nodes, [p[t] for p in plans])
+        nodes = [
+            Node(n.plan + (p[t],), image, state)
+            for n, p, (image, state) in zip(nodes, plans, children, strict=True)
+        ]
+        for steps, child in zip(out, children, strict=True):
+            steps.append(child)
+    return out

@@ -145,7 +145,12 @@ def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, st
     model = ObjectsModel(
         scene.observe(), nets.recognizer, load_object_perception(), load_object_dynamics(), _DRAWER[0]
     )
-    return search(model, task.goal, steps, config.search)
+    result = search(model, task.goal, steps, config.search)
+    if config.optimise_turns:  # the angle is the dynamics' input: searched, not descended
+        from afford.planning.angles import with_searched_turns
+
+        result = with_searched_turns(result, model, task.goal)
+    return result
 
 
 def _objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:

@@ -127,7 +127,8 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         help="learned planner: optimise the turn angles of the best plan with turns by gradient descent "
         "on eq. 5 through the prediction net (paper V), keeping it when it comes closer; needs a "
         "prediction net trained on continuous turns: without --weights, the one shipped for it "
-        "(weights/continuous)",
+        "(weights/continuous); objects planner: each turn's angle searched on a 5-degree grid "
+        "instead, its dynamics taking the angle as an input",
     )
     parser.add_argument(
         "--risk",

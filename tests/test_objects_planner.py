@@ -54,3 +54,26 @@ def test_plan_closed_loop_with_a_report(tmp_path, capsys):
     record = json.loads(capsys.readouterr().out)
     assert code == 0 and record["solved"], record
     assert report.is_file() and report.stat().st_size > 10_000
+
+
+def test_objects_weights_take_a_folder_with_either_net_and_refuse_one_with_neither(tmp_path, capsys):
+    import shutil
+    from argparse import Namespace
+
+    from afford.cli.options import objects_folder
+    from afford.shipped import DYNAMICS_FILE, OBJECTS
+
+    (tmp_path / "objects").mkdir()
+    shutil.copy(OBJECTS / DYNAMICS_FILE, tmp_path / "objects" / DYNAMICS_FILE)
+    # the folder `afford weights export` was given is read as its objects/ inside
+    folder = objects_folder(Namespace(objects_weights=str(tmp_path)))
+    assert folder == str(tmp_path / "objects")
+    # the perception net the folder lacks is the shipped one
+    assert load_object_perception(folder, fallback=True) is not None
+    assert load_object_dynamics(folder, fallback=True) is not None
+
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    code = main(["plan", "--task", TASK, "--planner", "objects", "--objects-weights", str(empty)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "--objects-weights" in err, err

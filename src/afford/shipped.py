@@ -28,18 +28,24 @@ PERCEPTION_FILE = "perception.safetensors"
 DYNAMICS_FILE = "dynamics.safetensors"
 
 
-def load_object_perception(weights: str | Path | None = None):
+def _object_net(weights: str | Path | None, name: str, fallback: bool) -> Path:
+    """A net's file in a weights folder; with fallback, the shipped one when the folder lacks it."""
+    path = Path(weights or OBJECTS) / name
+    return OBJECTS / name if fallback and not path.is_file() else path
+
+
+def load_object_perception(weights: str | Path | None = None, fallback: bool = False):
     """The object perception net from a weights folder (default: the shipped one)."""
     from afford.objects.perception_train import load_perception
 
-    return load_perception(Path(weights or OBJECTS) / PERCEPTION_FILE)
+    return load_perception(_object_net(weights, PERCEPTION_FILE, fallback))
 
 
-def load_object_dynamics(weights: str | Path | None = None):
+def load_object_dynamics(weights: str | Path | None = None, fallback: bool = False):
     """The object dynamics net (P^a over objects) from a weights folder (default: the shipped one)."""
     from afford.objects.train import load_dynamics
 
-    return load_dynamics(Path(weights or OBJECTS) / DYNAMICS_FILE)
+    return load_dynamics(_object_net(weights, DYNAMICS_FILE, fallback))
 
 
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:

@@ -27,6 +27,34 @@ def add_weights_argument(parser, detail: bool = False) -> None:
     )
 
 
+def add_objects_weights_argument(parser) -> None:
+    """--objects-weights: the object world model's nets (default: the ones shipped in the package)."""
+    parser.add_argument(
+        "--objects-weights",
+        metavar="DIR",
+        help="objects and perceived-sim planners: a folder with perception.safetensors and/or "
+        "dynamics.safetensors (as `afford weights export objects/...` writes them); a net the folder "
+        "lacks is the shipped one (default: both shipped)",
+    )
+
+
+def objects_folder(args) -> str | None:
+    """The --objects-weights folder, checked to hold at least one object net; None: the shipped."""
+    from pathlib import Path
+
+    from afford.shipped import DYNAMICS_FILE, PERCEPTION_FILE
+
+    folder = getattr(args, "objects_weights", None)
+    if folder is None:
+        return None
+    path = Path(folder)
+    if path.is_dir() and (path / "objects").is_dir():
+        path = path / "objects"  # the folder `afford weights export` was given
+    if not any((path / name).is_file() for name in (PERCEPTION_FILE, DYNAMICS_FILE)):
+        raise CLIError(f"--objects-weights {folder}: no {PERCEPTION_FILE} or {DYNAMICS_FILE} in it")
+    return str(path)
+
+
 def nets_folder(args) -> str | None:
     """The weights folder a planning command asked for: `--weights`, or with `--optimise-turns`
     alone the shipped continuous-turn prediction net's (paper V); None: the shipped nets."""
@@ -227,4 +255,5 @@ def planner_config(args, progress: bool):
         risk=args.risk,
         closed_loop=args.closed_loop,
         outcomes=args.outcomes,
+        objects_weights=objects_folder(args),
     )

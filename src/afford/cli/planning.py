@@ -11,6 +11,7 @@ from pathlib import Path
 from afford.cli.errors import CLIError
 from afford.cli.options import (
     PLANNERS_HELP,
+    add_objects_weights_argument,
     add_perturb_arguments,
     add_search_arguments,
     add_time_limit_argument,
@@ -306,6 +307,7 @@ def add_parsers(sub) -> None:
         "closed loop: one tree per round",
     )
     add_perturb_arguments(pl)
+    add_objects_weights_argument(pl)
     add_weights_argument(pl, detail=True)
     add_time_limit_argument(pl)
     add_search_arguments(pl)
@@ -320,6 +322,7 @@ def add_parsers(sub) -> None:
         "solved / plan / plan length / nodes / planning seconds per task.",
     )
     bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
+    add_objects_weights_argument(bt)
     add_weights_argument(bt)
     bt.add_argument(
         "--tasks",
@@ -348,6 +351,7 @@ def add_parsers(sub) -> None:
     br.add_argument("--max-steps", type=int, default=4)
     br.add_argument("--min-steps", type=int, default=1, help="fewest random executions a goal is made of")
     br.add_argument("--planner", default="all", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
+    add_objects_weights_argument(br)
     add_weights_argument(br)
     br.add_argument(
         "--workers",

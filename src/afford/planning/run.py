@@ -126,7 +126,8 @@ def _perceived_sim_search(
 
     if not _SIMULATOR:
         _SIMULATOR.append(Scene())
-    model = PerceivedSimModel(scene.observe(), load_object_perception(), _SIMULATOR[0])
+    perception = load_object_perception(config.objects_weights, fallback=True)
+    model = PerceivedSimModel(scene.observe(), perception, _SIMULATOR[0])
     return search(model, task.goal, steps, config.search)
 
 
@@ -142,9 +143,10 @@ def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, st
     if not _DRAWER:
         _DRAWER.append(Drawer())
     nets = _nets(learned)
-    model = ObjectsModel(
-        scene.observe(), nets.recognizer, load_object_perception(), load_object_dynamics(), _DRAWER[0]
-    )
+    folder = config.objects_weights
+    perception = load_object_perception(folder, fallback=True)
+    dynamics = load_object_dynamics(folder, fallback=True)
+    model = ObjectsModel(scene.observe(), nets.recognizer, perception, dynamics, _DRAWER[0])
     result = search(model, task.goal, steps, config.search)
     if config.optimise_turns:  # the angle is the dynamics' input: searched, not descended
         from afford.planning.angles import with_searched_turns

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -162,7 +163,9 @@ def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, c
         == 0
     )
     assert (run / "last.safetensors").is_file()
-    capsys.readouterr()
+    # the outcome temperature, fitted when training ended, is in the run and in the record
+    record = json.loads(capsys.readouterr().out)
+    assert (run / "calibration.json").is_file() and record["calibration"]["outcome_temperature"] > 0
     assert (
         main(
             [
@@ -179,8 +182,6 @@ def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, c
         )
         == 0
     )
-    import json
-
     report = json.loads(capsys.readouterr().out)
     assert report["executions"] > 0 and "still" in report["groups"]
     # a weights file of another kind: one line
@@ -200,6 +201,32 @@ def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, c
         == 2
     )
     assert "not a dynamics one" in capsys.readouterr().err
+
+
+def test_a_temperature_is_fitted_back_and_predict_applies_it(pose_dataset):
+    from afford.objects.calibration import fit_temperature, log_loss
+
+    rng = np.random.default_rng(0)
+    logits = rng.normal(0, 3, (4000, 2))
+    z = logits / 2.0  # the truth is twice as unsure as the logits say
+    p = np.exp(z) / np.exp(z).sum(1, keepdims=True)
+    won = (rng.random(4000) < p[:, 1]).astype(int)
+    shares = np.eye(2)[won]
+    fit = fit_temperature(logits, shares)
+    assert 1.8 < fit.outcome_temperature < 2.2
+    assert fit.nll_calibrated < fit.nll_raw == pytest.approx(log_loss(logits, shares, 1.0))
+
+    t = read_transitions(pose_dataset, None)
+    torch.manual_seed(0)
+    net = ObjectDynamics(dataclasses.replace(TINY, outcomes=2))
+    args = (t.before[:6], t.held_before[:6], t.actions[:6])
+    sure = predict(net, *args)
+    net.config.outcome_temperature = 4.0
+    unsure = predict(net, *args)
+    # the same outcomes in the same order, their probabilities nearer one half
+    np.testing.assert_array_equal(sure.poses, unsure.poses)
+    np.testing.assert_array_equal(sure.probability.argmax(1), unsure.probability.argmax(1))
+    assert np.all(np.abs(unsure.probability - 0.5) <= np.abs(sure.probability - 0.5) + 1e-7)
 
 
 def test_the_simulator_from_true_objects_gives_the_recorded_next_state(pose_dataset, scene):

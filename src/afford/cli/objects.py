@@ -9,6 +9,7 @@ from afford.cli.errors import CLIError
 
 
 def cmd_train_dynamics(args) -> int:
+    from afford.objects.calibration import CALIBRATION_FILE
     from afford.objects.dynamics import PRESETS
     from afford.objects.train import train
     from afford.training.overrides import apply_overrides, preset_config
@@ -28,6 +29,7 @@ def cmd_train_dynamics(args) -> int:
         "best_val_loss": state.best,
         "training_seconds": round(state.seconds, 1),
         "curves": str(Path(args.out) / "curves.png"),
+        "calibration": json.loads((Path(args.out) / CALIBRATION_FILE).read_text()),
     }
     if args.json:
         print(json.dumps(record, indent=2))
@@ -35,6 +37,11 @@ def cmd_train_dynamics(args) -> int:
         print(
             f"{args.out}: {state.step} steps in {state.seconds / 60:.1f} min, "
             f"best val loss {state.best:.4f}; curves: {record['curves']}"
+        )
+        fit = record["calibration"]
+        print(
+            f"outcome temperature {fit['outcome_temperature']:g}, fitted on {fit['executions']} val "
+            f"executions (log-loss {fit['nll_raw']:.3f} -> {fit['nll_calibrated']:.3f})"
         )
     return 0
 

@@ -119,12 +119,18 @@ def _prediction(run: Path) -> dict:
     return {"config": read_calibration(run)}  # the head's scaling, fitted by `afford eval prediction --run`
 
 
+def _dynamics(run: Path) -> dict:
+    from afford.objects.calibration import read_calibration
+
+    return {"config": read_calibration(run)}  # the outcome temperature, fitted when training ended
+
+
 # How each kind of net is exported: keyword arguments of training.checkpoint.export_weights.
 EXPORTS: dict[str, Callable[[Path], dict]] = {
     "recognition": _recognition,
     "prediction": _prediction,
     "agreement": lambda run: {},
-    "dynamics": lambda run: {},
+    "dynamics": _dynamics,
     "perception": lambda run: {},
 }
 

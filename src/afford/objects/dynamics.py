@@ -66,6 +66,9 @@ class DynamicsConfig:
     rare_weight: float = 1.0  # weight of an object that moves or leaves the table in the gate's loss
     moved: float = 0.002  # metres: an object that moved less than this counts as still
     turned_deg: float = 3.0  # ... and whose axes turned less than this
+    # The outcome head's logits are divided by this (objects/calibration.py: fitted on val
+    # after training; 1: as trained).
+    outcome_temperature: float = 1.0
 
 
 PRESETS = {
@@ -345,5 +348,5 @@ def predict(
     poses[gone.transpose(0, 2, 1) & was] = np.nan
     hp = np.where(was, held_p.transpose(0, 2, 1), 0.0)
     held_next = np.where(hp.max(-1) > 0.5, hp.argmax(-1), -1)
-    probability = torch.softmax(out["outcome"], -1).numpy()
+    probability = torch.softmax(out["outcome"] / net.config.outcome_temperature, -1).numpy()
     return Outcomes(poses.astype(np.float32), held_next.astype(np.int64), probability)

@@ -128,7 +128,7 @@ def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.nd
                 errors.copy[g].append(copy)
         # Calibration: how often each outcome is the one nearest to what happened.
         # Where every outcome is the same prediction, which one the head picks does not matter.
-        credit = _nearest(t.after[i], outcomes.poses[i], ~np.isnan(t.before[i, :, 0]))
+        credit = nearest_share(t.after[i], outcomes.poses[i], ~np.isnan(t.before[i, :, 0]))
         if credit.min() < credit.max():
             correct += list(credit)
             prob += list(outcomes.probability[i])
@@ -140,7 +140,7 @@ def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.nd
     }
 
 
-def _nearest(after: np.ndarray, poses: np.ndarray, was: np.ndarray, tie_px: float = 0.5) -> np.ndarray:
+def nearest_share(after: np.ndarray, poses: np.ndarray, was: np.ndarray, tie_px: float = 0.5) -> np.ndarray:
     """(K,) each outcome's share in being the one nearest the truth: its error summed over the
     objects on the table before (each capped at NEAR_PX * 10; an object gone in one and not the
     other costs the cap), one for the nearest, shared evenly among outcomes within `tie_px`."""

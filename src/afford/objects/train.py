@@ -2,7 +2,9 @@
 
 Examples are whole executions (`transitions.py`), from the train split of one dataset or
 several; batches are drawn at random and encoded on the fly, which costs little beside the
-nets. Validation is the val split's mixture loss.
+nets. Validation is the val split's mixture loss. When training ends, the outcome head's
+temperature is fitted on the val splits of every dataset (`calibration.py`) into
+RUN/calibration.json, which loading the run's checkpoints and exporting them apply.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from afford.objects.dynamics import (
     mixture_loss,
 )
 from afford.objects.transitions import Transitions, read_transitions
+from afford.training.checkpoint import BEST
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 
 KIND = "dynamics"
@@ -105,12 +108,30 @@ def train(
     (Path(run_dir) / "data.txt").write_text(
         "".join(f"{d}\n" for d in data_dirs) + f"training executions: {len(train_set)}\n"
     )
+    calibrate(run_dir, data_dirs)
     return state
 
 
-def load_dynamics(path: str | Path) -> ObjectDynamics:
-    """A trained dynamics net from a checkpoint or shipped weights file."""
+def calibrate(run_dir: str | Path, data_dirs: list[str | Path]):
+    """Fit the outcome head's temperature of RUN/best.safetensors on the val splits of
+    `data_dirs` into RUN/calibration.json (a re-run of a finished training does only this)."""
+    from afford.objects.calibration import fit_temperature, logits_and_shares, write_calibration
+
+    net = load_dynamics(Path(run_dir) / BEST, calibrated=False)
+    fit = fit_temperature(*logits_and_shares(net, load(data_dirs, "val")))
+    write_calibration(run_dir, fit)
+    return fit
+
+
+def load_dynamics(path: str | Path, calibrated: bool = True) -> ObjectDynamics:
+    """A trained dynamics net from a checkpoint or shipped weights file; a training run's
+    checkpoint takes the outcome temperature of its run's calibration.json, if any (a shipped
+    file has it in its config)."""
+    from afford.objects.calibration import read_calibration
     from afford.training.checkpoint import load_net_from_checkpoint
 
     net, _, _ = load_net_from_checkpoint(path, KIND, DynamicsConfig, ObjectDynamics)
+    if calibrated:
+        for name, value in read_calibration(Path(path).parent).items():
+            setattr(net.config, name, value)
     return net

@@ -353,14 +353,15 @@ STAGES: tuple[Stage, ...] = (
         "afford train dynamics --data data/poses --more-data data/poses-102 --more-data data/poses-103 "
         "--more-data data/poses-effects --out runs/dynamics",
         17,
-        "the cpu preset: 16,000 batches of 256 executions, from about 64,400",
+        "the cpu preset: 16,000 batches of 256 executions, from about 64,400; then the outcome "
+        "temperature fitted on the val splits (RUN/calibration.json, seconds)",
     ),
     _stage(
         "export-dynamics",
         "export",
         f"afford weights export objects/dynamics.safetensors --run runs/dynamics --out {MADE}",
         None,
-        "float16",
+        "float16, with the outcome temperature in its config",
     ),
     _stage(
         "train-perception",

@@ -144,7 +144,7 @@ RECIPES: dict[str, Recipe] = {
                 "export-dynamics",
             ),
             trained="train-dynamics",
-            commit="3301a27",
+            commit="91bd79a",
         ),
         Recipe(
             "objects/perception.safetensors",

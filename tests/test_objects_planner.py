@@ -9,7 +9,7 @@ import numpy as np
 
 from afford.cli.main import main
 from afford.objects.draw import Drawer
-from afford.planning.objects_model import ObjectsModel
+from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
 from afford.planning.strategies import search
 from afford.planning.tasks import load_task
 from afford.planning.tree import SearchConfig
@@ -32,6 +32,21 @@ def test_a_two_step_plan_is_found_and_its_states_are_drawn(scene):
     changed = np.abs(chosen[1].image - start).max(-1) > 0
     assert 0 < changed.mean() < 0.1
     assert len({id(n.state) for n in result.nodes}) == len(result.nodes)
+
+
+def test_every_outcome_kept_as_a_branch_still_finds_the_plan(scene):
+    task = load_task(TASK)
+    scene.reset(task.scene)
+    nets = (load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer())
+    model = ObjectsBranchingModel(scene.observe(), *nets, risk=0.5)
+    result = search(model, task.goal, 2, SearchConfig())
+    assert [a.type for a in result.plan] == ["grasp", "place"]
+    assert max(len(n.state.branches) for n in result.nodes) > 1  # the dynamics foresaw alternatives
+    for node in result.nodes:
+        branches = node.state
+        assert np.isclose(branches.probability.sum(), 1.0) and len(branches.branches) == len(branches.images)
+        assert np.all(np.diff(branches.probability) <= 1e-9)  # likeliest first
+        np.testing.assert_array_equal(node.image, branches.images[0])
 
 
 def test_plan_closed_loop_with_a_report(tmp_path, capsys):

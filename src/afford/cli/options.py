@@ -163,9 +163,9 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         type=float,
         default=PlannerConfig.risk,
         metavar="W",
-        help="ensemble planner, and learned and hybrid planners with --outcomes expected: a plan scores "
-        "its expected goal loss (eq. 5; over the members and their variance heads' outcomes, or over the "
-        "net's branches) plus W standard deviations of it: risk-averse "
+        help="ensemble planner, and learned, hybrid and objects planners with --outcomes expected: a plan "
+        "scores its expected goal loss (eq. 5; over the members and their variance heads' outcomes, or over "
+        "the net's branches) plus W standard deviations of it: risk-averse "
         f"(default {PlannerConfig.risk}); 0: the expected loss alone",
     )
     parser.add_argument(
@@ -175,7 +175,8 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         help="learned, hybrid and ensemble planners, with prediction nets that foresee two outcomes per "
         "step (a canonical one and a side effect): likeliest, each step carries on the one its head finds "
         "likelier (default); expected, both are kept as branches (per member, for the ensemble) and a plan "
-        "scores its expected goal loss (eq. 5) over them",
+        "scores its expected goal loss (eq. 5) over them; objects planner: the K outcomes of its dynamics "
+        "the same way, with their calibrated probabilities",
     )
     parser.add_argument(
         "--closed-loop",

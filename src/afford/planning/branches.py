@@ -101,11 +101,16 @@ class BranchingModel(LearnedModel):
         return children
 
     def score(self, goal: Goal, nodes: list[Node]) -> Scores:
-        """Each state's expected eq. (5) over its branches, `risk` standard deviations added,
-        and that deviation."""
-        mean, variance = branch_moments(goal, [n.state for n in nodes])
-        std = np.sqrt(variance)
-        return Scores(mean + (-self.risk if goal.negative else self.risk) * std, std)
+        return risky_scores(goal, [n.state for n in nodes], self.risk)
+
+
+def risky_scores(goal: Goal, states: list, risk: float) -> Scores:
+    """Each state's expected eq. (5) over its branches (states with `probability` and
+    `images`), `risk` standard deviations of it added (taken, for a negative goal), and that
+    deviation."""
+    mean, variance = branch_moments(goal, states)
+    std = np.sqrt(variance)
+    return Scores(mean + (-risk if goal.negative else risk) * std, std)
 
 
 def branch_moments(goal: Goal, states: list[Branches]) -> tuple[np.ndarray, np.ndarray]:

@@ -137,7 +137,7 @@ _DRAWER: list = []  # the simulator the objects planner draws its states with
 def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
     """The paper's search with the object world model: objects perceived, moved and drawn."""
     from afford.objects.draw import Drawer
-    from afford.planning.objects_model import ObjectsModel
+    from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
     from afford.shipped import load_object_dynamics, load_object_perception
 
     if not _DRAWER:
@@ -146,7 +146,11 @@ def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, st
     folder = config.objects_weights
     perception = load_object_perception(folder, fallback=True)
     dynamics = load_object_dynamics(folder, fallback=True)
-    model = ObjectsModel(scene.observe(), nets.recognizer, perception, dynamics, _DRAWER[0])
+    parts = (scene.observe(), nets.recognizer, perception, dynamics, _DRAWER[0])
+    if config.outcomes == "expected":  # every outcome of the dynamics a branch (PlannerConfig.outcomes)
+        model = ObjectsBranchingModel(*parts, risk=config.risk)
+    else:
+        model = ObjectsModel(*parts)
     result = search(model, task.goal, steps, config.search)
     if config.optimise_turns:  # the angle is the dynamics' input: searched, not descended
         from afford.planning.angles import with_searched_turns

@@ -92,3 +92,11 @@ def test_objects_weights_take_a_folder_with_either_net_and_refuse_one_with_neith
     code = main(["plan", "--task", TASK, "--planner", "objects", "--objects-weights", str(empty)])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "--objects-weights" in err, err
+
+
+def test_canonical_plans_checked_by_the_object_world_model(tmp_path, capsys):
+    for extra in ([], ["--closed-loop"]):
+        out = ["--out", str(tmp_path / "out")]
+        code = main(["plan", "--task", TASK, "--planner", "hybrid-objects", "--json", *out, *extra])
+        record = json.loads(capsys.readouterr().out)
+        assert code == 0 and record["solved"], record

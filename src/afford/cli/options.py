@@ -5,7 +5,8 @@ from __future__ import annotations
 from afford.cli.errors import CLIError
 
 PLANNERS_HELP = (
-    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble, perceived-sim, objects), "
+    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble, perceived-sim, objects, "
+    "hybrid-objects), "
     "several as a comma list, or all"
 )
 MAX_NODES_HELP = (

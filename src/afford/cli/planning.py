@@ -274,7 +274,10 @@ def add_parsers(sub) -> None:
         "prediction nets), hybrid (paper V: the symbolic planner's canonical plans, each checked by the "
         "learned nets against the goal; the search when all are rejected), hybrid-oracle (the same, "
         "checked by the simulator), ensemble (paper V: the learned search on an ensemble of prediction "
-        "nets, each plan scored by its members' mean goal loss plus --risk standard deviations). Writes a "
+        "nets, each plan scored by its members' mean goal loss plus --risk standard deviations), "
+        "perceived-sim (the simulator run on the objects perception sees), objects (the object world model: "
+        "objects perceived, moved by learned dynamics and drawn), hybrid-objects (canonical plans checked by "
+        "the object world model). Writes a "
         "picture like the paper's Fig. 8 and a JSON record. Exit status 1 when the executed plan misses "
         "the goal.",
     )

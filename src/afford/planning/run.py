@@ -134,23 +134,27 @@ def _perceived_sim_search(
 _DRAWER: list = []  # the simulator the objects planner draws its states with
 
 
-def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
-    """The paper's search with the object world model: objects perceived, moved and drawn."""
+def _objects_model(image: np.ndarray, config: PlannerConfig, learned):
+    """The object world model on `image`: its likeliest outcome carried on, or every outcome a
+    branch (PlannerConfig.outcomes)."""
     from afford.objects.draw import Drawer
     from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
     from afford.shipped import load_object_dynamics, load_object_perception
 
     if not _DRAWER:
         _DRAWER.append(Drawer())
-    nets = _nets(learned)
     folder = config.objects_weights
     perception = load_object_perception(folder, fallback=True)
     dynamics = load_object_dynamics(folder, fallback=True)
-    parts = (scene.observe(), nets.recognizer, perception, dynamics, _DRAWER[0])
-    if config.outcomes == "expected":  # every outcome of the dynamics a branch (PlannerConfig.outcomes)
-        model = ObjectsBranchingModel(*parts, risk=config.risk)
-    else:
-        model = ObjectsModel(*parts)
+    parts = (image, _nets(learned).recognizer, perception, dynamics, _DRAWER[0])
+    if config.outcomes == "expected":
+        return ObjectsBranchingModel(*parts, risk=config.risk)
+    return ObjectsModel(*parts)
+
+
+def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
+    """The paper's search with the object world model: objects perceived, moved and drawn."""
+    model = _objects_model(scene.observe(), config, learned)
     result = search(model, task.goal, steps, config.search)
     if config.optimise_turns:  # the angle is the dynamics' input: searched, not descended
         from afford.planning.angles import with_searched_turns
@@ -228,17 +232,29 @@ def _symbolic(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outco
 
 def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     learned = _nets(learned)
-    return _solve_hybrid(
-        task,
-        "hybrid",
-        lambda start: _learned_model(start, learned, config),
-        scene,
-        config,
-    )
+    model = HYBRID_MODELS["hybrid"]
+    return _solve_hybrid(task, "hybrid", lambda start: model(scene, start, config, learned), scene, config)
 
 
 def _hybrid_oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     return _solve_hybrid(task, "hybrid-oracle", lambda start: OracleModel(scene), scene, config)
+
+
+def _hybrid_objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    learned = _nets(learned)
+    model = HYBRID_MODELS["hybrid-objects"]
+    return _solve_hybrid(
+        task, "hybrid-objects", lambda start: model(scene, start, config, learned), scene, config
+    )
+
+
+# The world model each hybrid planner checks the canonical plans with:
+# (scene, image seen, config, learned nets) -> WorldModel.
+HYBRID_MODELS = {
+    "hybrid": lambda scene, image, config, learned: _learned_model(image, learned, config),
+    "hybrid-oracle": lambda scene, image, config, learned: OracleModel(scene),
+    "hybrid-objects": lambda scene, image, config, learned: _objects_model(image, config, learned),
+}
 
 
 class ClosedLoopError(UserError):
@@ -294,29 +310,33 @@ def _searcher(plan):
     return make
 
 
-def _hybrid_rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
+def _hybrid_rounds(planner: str):
     """Closed-loop hybrid: the canonical proposals are made once, from the task's start; each
-    round the world model checks, from the observed state, the rest of every proposal that
-    began with the actions taken so far, and searches when it keeps none."""
-    proposals = plan_symbolic(
-        scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
-    ).plans
-    taken: list[Affordance] = []
+    round the planner's world model checks, from the observed state, the rest of every
+    proposal that began with the actions taken so far, and searches when it keeps none."""
+    make_model = HYBRID_MODELS[planner]
 
-    def plan_from(steps: int) -> SearchResult:
-        image = scene.observe()
-        model = OracleModel(scene) if learned is None else _learned_model(image, learned, config)
-        rest = [
-            p[len(taken) :]
-            for p in proposals
-            if tuple(p[: len(taken)]) == tuple(taken) and len(p) > len(taken)
-        ]
-        result = plan_hybrid(model, task.goal, rest, steps, config.search, config.accept).search
-        if result.plan:
-            taken.append(result.plan[0])
-        return result
+    def rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
+        proposals = plan_symbolic(
+            scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
+        ).plans
+        taken: list[Affordance] = []
 
-    return plan_from
+        def plan_from(steps: int) -> SearchResult:
+            model = make_model(scene, scene.observe(), config, learned)
+            rest = [
+                p[len(taken) :]
+                for p in proposals
+                if tuple(p[: len(taken)]) == tuple(taken) and len(p) > len(taken)
+            ]
+            result = plan_hybrid(model, task.goal, rest, steps, config.search, config.accept).search
+            if result.plan:
+                taken.append(result.plan[0])
+            return result
+
+        return plan_from
+
+    return rounds
 
 
 def _solve_hybrid(task: Task, name: str, make_model, scene: Scene, config: PlannerConfig) -> Outcome:
@@ -439,6 +459,7 @@ PLANNER_REGISTRY = {
     "ensemble": _ensemble,  # the learned planner on an ensemble of prediction nets, risk-averse (paper V)
     "perceived-sim": _perceived_sim,  # the simulator run from perceived objects (objects/simulated.py)
     "objects": _objects,  # the object world model: objects perceived, moved by learned dynamics, drawn
+    "hybrid-objects": _hybrid_objects,  # canonical proposals checked by the object world model
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
 # Each planner that can plan again from an observed state: (task, scene, config, learned nets
@@ -446,10 +467,17 @@ PLANNERS = tuple(PLANNER_REGISTRY)
 CLOSED_LOOP = {
     "oracle": _searcher(_oracle_search),
     "learned": _searcher(_learned_search),
-    "hybrid": _hybrid_rounds,
-    "hybrid-oracle": _hybrid_rounds,
+    "hybrid": _hybrid_rounds("hybrid"),
+    "hybrid-oracle": _hybrid_rounds("hybrid-oracle"),
     "ensemble": _searcher(_ensemble_search),
     "perceived-sim": _searcher(_perceived_sim_search),
     "objects": _searcher(_objects_search),
+    "hybrid-objects": _hybrid_rounds("hybrid-objects"),
 }
-USES_NETS = ("learned", "hybrid", "ensemble", "objects")  # the planners that load the trained nets
+USES_NETS = (
+    "learned",
+    "hybrid",
+    "ensemble",
+    "objects",
+    "hybrid-objects",
+)  # the planners that load the trained nets

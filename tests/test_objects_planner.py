@@ -100,3 +100,27 @@ def test_canonical_plans_checked_by_the_object_world_model(tmp_path, capsys):
         code = main(["plan", "--task", TASK, "--planner", "hybrid-objects", "--json", *out, *extra])
         record = json.loads(capsys.readouterr().out)
         assert code == 0 and record["solved"], record
+
+
+def test_a_failure_is_diagnosed_through_the_object_world_model(scene):
+    """With a recognition net that recognises nothing, the oracle's plan is replayed through the
+    object world model's drawn states and the failure named recognition's."""
+    import torch
+    from helpers import GOOD
+
+    from afford.planning.diagnose import diagnose
+    from afford.planning.tasks import task_from_json
+    from afford.prediction.config import PRESETS as PRED
+    from afford.prediction.model import PredictionNet
+    from afford.recognition.config import PRESETS as REC
+    from afford.recognition.infer import Recognizer
+    from afford.recognition.model import RecognitionNet
+    from afford.shipped import LearnedNets
+
+    torch.manual_seed(0)
+    recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.999)
+    task = task_from_json(GOOD, scene=scene)
+    d = diagnose(task, scene, LearnedNets(recognizer, PredictionNet(PRED["tiny"])), planner="objects")
+    assert d.oracle.success and not d.learned.success
+    assert d.cause == "recognition" and d.to_dict()["planner"] == "objects"
+    assert d.steps[-1].true_loss < 1e-3

@@ -19,6 +19,7 @@ from afford.cli.options import (
     check_closed_loop,
     load_nets,
     nets_folder,
+    objects_folder,
     planner_config,
 )
 from afford.cli.options import perturbation as perturbation_of
@@ -234,8 +235,10 @@ def cmd_diagnose(args) -> int:
     from tqdm import tqdm
 
     from afford.planning.diagnose import diagnose
+    from afford.planning.outcome import PlannerConfig
     from afford.planning.sentence_goal import bind_weights
     from afford.planning.tasks import load_task
+    from afford.planning.tree import SearchConfig
     from afford.sim.scene import Scene
 
     files = []
@@ -246,12 +249,13 @@ def cmd_diagnose(args) -> int:
             raise CLIError(f"{given}: no task files (*.json) there")
         files += found
     learned = load_nets(args.weights)
+    config = PlannerConfig(search=SearchConfig(progress=False), objects_weights=objects_folder(args))
     scene = Scene()
     out = []
     for f in tqdm(files, desc="diagnose", unit="task", disable=args.json or len(files) == 1):
         task = load_task(f, scene)
         bind_weights(task.goal, args.weights)
-        d = diagnose(task, scene, learned)
+        d = diagnose(task, scene, learned, config, args.planner)
         out.append(d.to_dict())
         if not args.json:
             tqdm.write(d.describe())
@@ -262,6 +266,7 @@ def cmd_diagnose(args) -> int:
 
 
 def add_parsers(sub) -> None:
+    from afford.planning.diagnose import PLANNERS as DIAGNOSABLE
     from afford.planning.run import PLANNERS
 
     pl = sub.add_parser(
@@ -378,14 +383,23 @@ def add_parsers(sub) -> None:
     dg = sub.add_parser(
         "diagnose",
         help="why the learned planner fails a task (recognition, prediction, goal or execution)",
-        description="Plan each task with the learned planner and the oracle; where the learned plan fails, "
-        "replay the oracle's plan through the learned nets and name the cause: execution (a recognised "
+        description="Plan each task with the learned planner (or, with --planner objects, the object world "
+        "model) and the oracle; where the learned plan fails, replay the oracle's plan through its world "
+        "model and name the cause: execution (a recognised "
         "affordance was not there), recognition (the oracle's action is not among the edges recognised on "
         "the predicted state), goal (the chosen plan truly matches the goal image as well, eq. 5) or "
         "prediction (the net foresaw the oracle plan's effects wrongly). Oracle trees of 4 steps take "
         "minutes.",
     )
     dg.add_argument("tasks", nargs="+", metavar="TASK.json|DIR", help="task files, or folders of them")
+    dg.add_argument(
+        "--planner",
+        choices=DIAGNOSABLE,
+        default="learned",
+        help="whose world model the oracle's plan is replayed through: the EM*D nets' (learned, the "
+        "default) or the object world model's (objects)",
+    )
+    add_objects_weights_argument(dg)
     add_weights_argument(dg)
     dg.add_argument("--json", action="store_true")
     dg.set_defaults(func=cmd_diagnose)

@@ -1,4 +1,5 @@
-"""Why a learned plan failed: the oracle's plan replayed through the learned world model.
+"""Why a learned plan failed: the oracle's plan replayed through the learned world model
+(the EM*D nets', or the object world model's: `planner`).
 
 The oracle (the simulator as world model) gives a plan that works. Replaying it step by step
 through the learned model says at which depth of the method the learned planner lost it:
@@ -22,15 +23,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from afford.planning.learned import LearnedModel
 from afford.planning.oracle import execute_plan
-from afford.planning.run import Outcome, PlannerConfig, solve
+from afford.planning.run import WORLD_MODELS, Outcome, PlannerConfig, solve
 from afford.planning.tasks import Task
 from afford.planning.tree import Node, SearchConfig, edges
 from afford.recognition.metrics import matches
 from afford.sim.scene import Scene
 
 CAUSES = ("solved", "oracle fails", "execution", "recognition", "goal", "prediction")
+PLANNERS = ("learned", "objects")  # the planners with a learned world model to replay through
 
 
 @dataclass
@@ -52,10 +53,12 @@ class Diagnosis:
     oracle: Outcome | None  # None when the learned plan succeeded
     steps: list[StepCheck] = field(default_factory=list)
     chosen_true_loss: float | None = None  # eq. (5) on the executed learned plan's end state
+    planner: str = "learned"
 
     def to_dict(self) -> dict:
         return {
             "task": self.task,
+            "planner": self.planner,
             "cause": self.cause,
             "learned_plan": [a.to_dict() for a in self.learned.plan or ()],
             "learned_predicted_loss": self.learned.loss,
@@ -74,25 +77,27 @@ class Diagnosis:
             )
         if self.learned.plan is not None and self.chosen_true_loss is not None:
             lines.append(
-                f"  learned chose {len(self.learned.plan)} steps: loss predicted {self.learned.loss:.5f}, "
-                f"true {self.chosen_true_loss:.5f}"
+                f"  {self.planner} chose {len(self.learned.plan)} steps: loss predicted "
+                f"{self.learned.loss:.5f}, true {self.chosen_true_loss:.5f}"
             )
         return "\n".join(lines)
 
 
-def diagnose(task: Task, scene: Scene, learned, config: PlannerConfig | None = None) -> Diagnosis:
-    """Plan `task` with the learned planner and the oracle, then replay the oracle's plan
-    through the learned model to name the cause of a failure (module docstring)."""
+def diagnose(
+    task: Task, scene: Scene, learned, config: PlannerConfig | None = None, planner: str = "learned"
+) -> Diagnosis:
+    """Plan `task` with `planner` (one of PLANNERS) and the oracle, then replay the oracle's
+    plan through the planner's world model to name the cause of a failure (module docstring)."""
     config = config or PlannerConfig(search=SearchConfig(progress=False))
-    mine = solve(task, "learned", scene, config, learned)
+    mine = solve(task, planner, scene, config, learned)
     chosen_true = float(task.goal.loss(mine.executed[-1][None])[0])
     if mine.success:  # nothing to explain, and no oracle tree to grow
-        return Diagnosis(task.name, "solved", mine, None, chosen_true_loss=chosen_true)
+        return Diagnosis(task.name, "solved", mine, None, chosen_true_loss=chosen_true, planner=planner)
     oracle = solve(task, "oracle", scene, config)
     if not oracle.success:
-        return Diagnosis(task.name, "oracle fails", mine, oracle, chosen_true_loss=chosen_true)
+        return Diagnosis(task.name, "oracle fails", mine, oracle, [], chosen_true, planner)
     scene.reset(task.scene)
-    model = LearnedModel(scene.observe(), learned.recognizer, learned.predictor)
+    model = WORLD_MODELS[planner](scene, scene.observe(), config, learned)
     truth = execute_plan(scene, task.scene, oracle.plan, task.success).images
     image, state = model.root()
     node = Node((), image, state)
@@ -123,4 +128,4 @@ def diagnose(task: Task, scene: Scene, learned, config: PlannerConfig | None = N
         cause = "goal"
     else:
         cause = "prediction"
-    return Diagnosis(task.name, cause, mine, oracle, steps, chosen_true)
+    return Diagnosis(task.name, cause, mine, oracle, steps, chosen_true, planner)

@@ -231,30 +231,26 @@ def _symbolic(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outco
 
 
 def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    learned = _nets(learned)
-    model = HYBRID_MODELS["hybrid"]
-    return _solve_hybrid(task, "hybrid", lambda start: model(scene, start, config, learned), scene, config)
+    return _solve_hybrid(task, "hybrid", scene, config, _nets(learned))
 
 
 def _hybrid_oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    return _solve_hybrid(task, "hybrid-oracle", lambda start: OracleModel(scene), scene, config)
+    return _solve_hybrid(task, "hybrid-oracle", scene, config, None)
 
 
 def _hybrid_objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    learned = _nets(learned)
-    model = HYBRID_MODELS["hybrid-objects"]
-    return _solve_hybrid(
-        task, "hybrid-objects", lambda start: model(scene, start, config, learned), scene, config
-    )
+    return _solve_hybrid(task, "hybrid-objects", scene, config, _nets(learned))
 
 
-# The world model each hybrid planner checks the canonical plans with:
+# The world models a plan can be checked or replayed with (hybrid planners, `diagnose.py`):
 # (scene, image seen, config, learned nets) -> WorldModel.
-HYBRID_MODELS = {
-    "hybrid": lambda scene, image, config, learned: _learned_model(image, learned, config),
-    "hybrid-oracle": lambda scene, image, config, learned: OracleModel(scene),
-    "hybrid-objects": lambda scene, image, config, learned: _objects_model(image, config, learned),
+WORLD_MODELS = {
+    "learned": lambda scene, image, config, learned: _learned_model(image, learned, config),
+    "oracle": lambda scene, image, config, learned: OracleModel(scene),
+    "objects": lambda scene, image, config, learned: _objects_model(image, config, learned),
 }
+# Each hybrid planner's world model, which checks the canonical plans.
+HYBRID_MODELS = {"hybrid": "learned", "hybrid-oracle": "oracle", "hybrid-objects": "objects"}
 
 
 class ClosedLoopError(UserError):
@@ -314,7 +310,7 @@ def _hybrid_rounds(planner: str):
     """Closed-loop hybrid: the canonical proposals are made once, from the task's start; each
     round the planner's world model checks, from the observed state, the rest of every
     proposal that began with the actions taken so far, and searches when it keeps none."""
-    make_model = HYBRID_MODELS[planner]
+    make_model = WORLD_MODELS[HYBRID_MODELS[planner]]
 
     def rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
         proposals = plan_symbolic(
@@ -339,14 +335,14 @@ def _hybrid_rounds(planner: str):
     return rounds
 
 
-def _solve_hybrid(task: Task, name: str, make_model, scene: Scene, config: PlannerConfig) -> Outcome:
-    """Canonical proposals checked by a world model, search as the fallback (`hybrid.py`).
-    `make_model(start image)` builds the world model on the scene reset to the task's start."""
+def _solve_hybrid(task: Task, name: str, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    """Canonical proposals checked by the planner's world model (HYBRID_MODELS), built on the
+    scene reset to the task's start; search as the fallback (`hybrid.py`)."""
     proposals = plan_symbolic(
         scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
     )
     scene.reset(task.scene)
-    model = make_model(scene.observe())
+    model = WORLD_MODELS[HYBRID_MODELS[name]](scene, scene.observe(), config, learned)
     hybrid = plan_hybrid(model, task.goal, proposals.plans, task.max_steps, config.search, config.accept)
     outcome = _judge(task, name, hybrid.search, scene, source=hybrid.source)
     outcome.seconds += proposals.seconds

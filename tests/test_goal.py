@@ -8,11 +8,11 @@ from afford.planning.goal import Goal, GoalError, window_mse
 
 def test_window_mse_matches_brute_force():
     rng = np.random.default_rng(0)
-    states = rng.random((2, 20, 24, 4))
+    states = rng.random((19, 20, 24, 4))  # more states than are computed at once
     patch = rng.random((5, 7, 4))
     fast = window_mse(patch, states)
-    assert fast.shape == (2, 16, 18)
-    for b, y, x in [(0, 0, 0), (1, 15, 17), (0, 7, 3)]:
+    assert fast.shape == (19, 16, 18)
+    for b, y, x in [(0, 0, 0), (1, 15, 17), (0, 7, 3), (18, 4, 9), (9, 15, 0)]:
         brute = ((states[b, y : y + 5, x : x + 7] - patch) ** 2).mean()
         assert fast[b, y, x] == pytest.approx(brute, abs=1e-9)
 

@@ -71,10 +71,24 @@ def window_mse(patch: np.ndarray, states: np.ndarray) -> np.ndarray:
         raise GoalError(f"goal patch has {c} channels but the states have {cs}")
     if h > H or w > W:
         raise GoalError(f"goal patch {h}x{w} is larger than the state image {H}x{W}")
-    # Cross term: sum over the window of s * g, for every window (correlation = convolution
-    # with the flipped patch).
-    fs = np.fft.rfft2(states, axes=(1, 2))
     fg = np.fft.rfft2(g[::-1, ::-1], s=(H, W), axes=(0, 1))
+    # A few states at a time: the arrays of a whole tree's depth (hundreds of states) fall
+    # out of the caches, which made one call 4-5 times slower; each state's result is the same.
+    parts = [
+        _window_mse(states[i : i + STATES_AT_ONCE], g, fg) for i in range(0, len(states), STATES_AT_ONCE)
+    ]
+    return np.concatenate(parts) if parts else np.zeros((0, H - h + 1, W - w + 1))
+
+
+STATES_AT_ONCE = 8  # measured: 8 of 1-64 the fastest for 313 states of 128 x 128 x 4
+
+
+def _window_mse(states: np.ndarray, g: np.ndarray, fg: np.ndarray) -> np.ndarray:
+    h, w, c = g.shape
+    _, H, W, _ = states.shape
+    # Cross term: sum over the window of s * g, for every window (correlation = convolution
+    # with the flipped patch, whose transform is fg).
+    fs = np.fft.rfft2(states, axes=(1, 2))
     cross = np.fft.irfft2(fs * fg[None], s=(H, W), axes=(1, 2)).sum(axis=3)
     cross = cross[:, h - 1 :, w - 1 :]
     # Window sums of s^2 from a zero-padded integral image.

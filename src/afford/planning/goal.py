@@ -61,7 +61,7 @@ def window_mse(patch: np.ndarray, states: np.ndarray) -> np.ndarray:
     correlation per channel, done by FFT, and the window sums of squares come from an
     integral image: cost does not grow with the patch size.
     """
-    states = np.asarray(states, dtype=np.float64)
+    states = np.asarray(states)  # to float64 a chunk at a time, below
     if states.ndim == 3:
         states = states[None]
     g = np.asarray(patch, dtype=np.float64)
@@ -85,6 +85,7 @@ STATES_AT_ONCE = 8  # measured: 8 of 1-64 the fastest for 313 states of 128 x 12
 
 def _window_mse(states: np.ndarray, g: np.ndarray, fg: np.ndarray) -> np.ndarray:
     h, w, c = g.shape
+    states = states.astype(np.float64)
     _, H, W, _ = states.shape
     # Cross term: sum over the window of s * g, for every window (correlation = convolution
     # with the flipped patch, whose transform is fg).

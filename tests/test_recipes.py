@@ -39,7 +39,15 @@ PRESETS_OF = {
 }
 # Config fields fitted after training (calibrations, which export writes into the config) or
 # filled in by training itself (the agreement model's vocabulary): not the recipe's to set.
-FITTED = {"choice_scale", "choice_bias", "choice_scales", "choice_biases", "variance_scale", "vocabulary"}
+FITTED = {
+    "choice_scale",
+    "choice_bias",
+    "choice_scales",
+    "choice_biases",
+    "variance_scale",
+    "vocabulary",
+    "outcome_temperature",
+}
 # The options of a stage that name what it reads, and the one that names what it makes.
 READS = ("data", "more_data", "init", "predicted", "prediction", "run", "dir")
 

@@ -18,12 +18,12 @@ from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel, execute_plan
 from afford.planning.outcome import Outcome, PlannerConfig
 from afford.planning.strategies import search
-from afford.planning.symbolic import CanonicalWorld, plan_symbolic
+from afford.planning.symbolic import plan_symbolic
+from afford.planning.symbolic_outcome import solve_symbolic
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchResult
 from afford.planning.uncertain import EnsembleBranchingModel, EnsembleModel
 from afford.sim.affordances import Affordance
-from afford.sim.constants import TOLERANCES
 from afford.sim.perturb import Perturbation, piles, reset_perturbed
 from afford.sim.scene import Scene
 
@@ -45,8 +45,6 @@ ENSEMBLE_MODELS = {
         image, nets.recognizer, nets.members, config.risk
     ),
 }
-
-DEVIATION = TOLERANCES.position  # this far from its canonical place, an object's fate is non-canonical
 
 
 def solve(
@@ -227,7 +225,7 @@ def perturbed_successes(
 
 
 def _symbolic(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    return _solve_symbolic(task, scene)
+    return solve_symbolic(task, scene)
 
 
 def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
@@ -376,73 +374,6 @@ def _judge(task: Task, name: str, result: SearchResult, scene: Scene, source: st
         source=source,
         search=result,
     )
-
-
-def _solve_symbolic(task: Task, scene: Scene) -> Outcome:
-    names = task.object_names()
-    result = plan_symbolic(scene, task.scene, names, task.success, task.max_steps)
-    if result.plan is None:
-        scene.reset(task.scene)
-        start = scene.observe()
-        return Outcome(
-            task=task.name,
-            planner="symbolic",
-            plan=None,
-            planned=[start],
-            executed=[start],
-            success=False,
-            nodes=result.expanded,
-            seconds=result.seconds,
-            reason=f"no plan of at most {task.max_steps} steps reaches the goal by canonical effects",
-            success_rate=0.0,
-        )
-    world = CanonicalWorld(scene, task.scene, names)
-    planned = []
-    for state in result.trace:
-        world.realise(state)
-        planned.append(scene.observe())
-    # The others first, so that the scene ends on the plan the outcome reports.
-    others = [execute_plan(scene, task.scene, plan, task.success).success for plan in result.plans[1:]]
-    ex = execute_plan(scene, task.scene, result.plan, task.success)
-    reason = "" if ex.success else _deviation(scene, result.predicted, names)
-    rate = (ex.success + sum(others)) / len(result.plans)
-    if len(result.plans) > 1:
-        reason = (reason + "; " if reason else "") + (
-            f"{rate:.0%} of {len(result.plans)} equally short canonical plans succeed"
-            + (f" (sampled from {result.total})" if result.total > len(result.plans) else "")
-        )
-    return Outcome(
-        task=task.name,
-        planner="symbolic",
-        plan=result.plan,
-        planned=planned,
-        executed=ex.images,
-        success=ex.success,
-        nodes=result.expanded,
-        seconds=result.seconds,
-        reason=reason,
-        steps_executed=ex.executed,
-        success_rate=rate,
-        tried=len(result.plans),
-        total=result.total,
-    )
-
-
-def _deviation(scene: Scene, predicted, names: list[str]) -> str:
-    """Which objects physics put somewhere other than the canonical effects said."""
-    notes = []
-    for name in names:
-        real = scene.object(name)
-        want = np.asarray(predicted.pose(name).pos)
-        if not real.present:
-            notes.append(f"{name} fell off the table")
-            continue
-        off = float(np.linalg.norm(real.pos - want))
-        if off > DEVIATION and name != predicted.held:
-            tipped = " and toppled" if real.kind == "cup" and real.up_axis[2] < TOLERANCES.upright_cos else ""
-            notes.append(f"{name} ended {off * 100:.0f} cm from its canonical place{tipped}")
-    detail = "; ".join(notes) if notes else "objects are where canonical effects put them"
-    return f"non-canonical effects: {detail}"
 
 
 # Each planner: (task, scene, search config, learned nets or None) -> Outcome.

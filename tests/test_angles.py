@@ -5,6 +5,7 @@ import torch
 
 from afford.planning.angles import optimise_turns
 from afford.planning.goal import Goal
+from afford.planning.tree import WorldModel
 from afford.sim.affordance import Col
 from afford.sim.affordances import Affordance
 
@@ -52,7 +53,7 @@ def test_two_turns_are_optimised_together_and_a_plan_without_turns_is_kept():
     assert kept.plan == grasp and kept.curves == []
 
 
-class DialModel:
+class DialModel(WorldModel):
     """The Dial as a learned planner's world model: its start image, its net, its predict."""
 
     def __init__(self):

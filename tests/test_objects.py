@@ -166,6 +166,19 @@ def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, c
     # the outcome temperature, fitted when training ended, is in the run and in the record
     record = json.loads(capsys.readouterr().out)
     assert (run / "calibration.json").is_file() and record["calibration"]["outcome_temperature"] > 0
+    # a run's checkpoint takes the temperature fitted to its own step; an exported file its own
+    from afford.objects.train import load_dynamics
+    from afford.training.checkpoint import export_weights, read_checkpoint
+
+    step = read_checkpoint(run / "best.safetensors", "dynamics")[1]["step"]
+    (run / "calibration.json").write_text(json.dumps({"outcome_temperature": 3.0, "step": step}))
+    assert load_dynamics(run / "best.safetensors").config.outcome_temperature == 3.0
+    assert load_dynamics(run / "best.safetensors", calibrated=False).config.outcome_temperature == 1.0
+    exported = run / "shipped.safetensors"
+    export_weights(run / "best.safetensors", exported, "dynamics", config={"outcome_temperature": 2.0})
+    assert load_dynamics(exported).config.outcome_temperature == 2.0
+    (run / "calibration.json").write_text(json.dumps({"outcome_temperature": 3.0, "step": step + 1}))
+    assert load_dynamics(run / "best.safetensors").config.outcome_temperature == 1.0
     assert (
         main(
             [

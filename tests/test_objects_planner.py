@@ -10,6 +10,7 @@ import numpy as np
 from afford.cli.main import main
 from afford.objects.draw import Drawer
 from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
+from afford.planning.run import solve
 from afford.planning.strategies import search
 from afford.planning.tasks import load_task
 from afford.planning.tree import SearchConfig
@@ -94,12 +95,15 @@ def test_objects_weights_take_a_folder_with_either_net_and_refuse_one_with_neith
     assert code == 2 and len(err.splitlines()) == 1 and "--objects-weights" in err, err
 
 
-def test_canonical_plans_checked_by_the_object_world_model(tmp_path, capsys):
+def test_canonical_plans_checked_by_the_object_world_model(tmp_path, capsys, scene):
     for extra in ([], ["--closed-loop"]):
         out = ["--out", str(tmp_path / "out")]
         code = main(["plan", "--task", TASK, "--planner", "hybrid-objects", "--json", *out, *extra])
         record = json.loads(capsys.readouterr().out)
-        assert code == 0 and record["solved"], record
+        assert code == 0 and record["solved"] and record["planner"] == "hybrid-objects", record
+    # open loop, the object world model kept a canonical plan (it did not fall back to search)
+    outcome = solve(load_task(TASK, scene), "hybrid-objects", scene)
+    assert outcome.source == "symbolic" and outcome.success
 
 
 def test_a_failure_is_diagnosed_through_the_object_world_model(scene):
@@ -124,3 +128,23 @@ def test_a_failure_is_diagnosed_through_the_object_world_model(scene):
     assert d.oracle.success and not d.learned.success
     assert d.cause == "recognition" and d.to_dict()["planner"] == "objects"
     assert d.steps[-1].true_loss < 1e-3
+
+
+def test_outcomes_alike_are_one_branch_drawn_from_the_likeliest():
+    from afford.objects.dynamics import Outcomes
+    from afford.planning.objects_model import _distinct
+
+    upright = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    poses = np.full((3, 2, 2, 7), np.nan, dtype=np.float32)  # (rows, K, slots, 7)
+    poses[:, :, 0] = upright
+    poses[0, 1, 0, 0] = 0.05  # row 0's second outcome moves the object 5 cm
+    poses[1, 0, 0, 0] = 0.0005  # row 1's first is row 0's first, half a millimetre off
+    poses[1, 1, 0, 0] = 0.05
+    poses[2, 0, 0, 3:7] = [0.0, 0.0, 0.0, 1.0]  # row 2 (another parent): the object turned
+    outcomes = Outcomes(poses, np.full((3, 2), -1), np.array([[0.9, 0.1], [0.3, 0.7], [0.5, 0.5]]))
+    found = _distinct(outcomes, range(0, 2), np.array([0.4, 0.6]))
+    # 0.4 * 0.9 + 0.6 * 0.3 stay, 0.4 * 0.1 + 0.6 * 0.7 move; each drawn from its likeliest
+    assert np.allclose([f.probability for f in found], [0.54, 0.46])
+    assert [(f.row, f.outcome) for f in found] == [(0, 0), (1, 1)]
+    found = _distinct(outcomes, range(0, 3), np.array([0.2, 0.3, 0.5]))
+    assert len(found) == 3 and np.isclose(sum(f.probability for f in found), 1.0)

@@ -39,10 +39,13 @@ def cmd_train_dynamics(args) -> int:
             f"best val loss {state.best:.4f}; curves: {record['curves']}"
         )
         fit = record["calibration"]
-        print(
-            f"outcome temperature {fit['outcome_temperature']:g}, fitted on {fit['executions']} val "
-            f"executions (log-loss {fit['nll_raw']:.3f} -> {fit['nll_calibrated']:.3f})"
-        )
+        if fit["executions"]:
+            print(
+                f"outcome temperature {fit['outcome_temperature']:g}, fitted on {fit['executions']} val "
+                f"executions (log-loss {fit['nll_raw']:.3f} -> {fit['nll_calibrated']:.3f})"
+            )
+        else:
+            print("outcome temperature 1: no val execution whose outcomes differ")
     return 0
 
 

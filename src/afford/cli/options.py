@@ -33,7 +33,8 @@ def add_objects_weights_argument(parser) -> None:
     parser.add_argument(
         "--objects-weights",
         metavar="DIR",
-        help="objects and perceived-sim planners: a folder with perception.safetensors and/or "
+        help="objects, hybrid-objects and perceived-sim planners (and diagnose --planner objects): a "
+        "folder with perception.safetensors and/or "
         "dynamics.safetensors (as `afford weights export objects/...` writes them); a net the folder "
         "lacks is the shipped one (default: both shipped)",
     )
@@ -49,7 +50,8 @@ def objects_folder(args) -> str | None:
     if folder is None:
         return None
     path = Path(folder)
-    if path.is_dir() and (path / "objects").is_dir():
+    held = [name for name in (PERCEPTION_FILE, DYNAMICS_FILE) if (path / name).is_file()]
+    if not held and (path / "objects").is_dir():
         path = path / "objects"  # the folder `afford weights export` was given
     if not any((path / name).is_file() for name in (PERCEPTION_FILE, DYNAMICS_FILE)):
         raise CLIError(f"--objects-weights {folder}: no {PERCEPTION_FILE} or {DYNAMICS_FILE} in it")
@@ -176,7 +178,8 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         help="learned, hybrid and ensemble planners, with prediction nets that foresee two outcomes per "
         "step (a canonical one and a side effect): likeliest, each step carries on the one its head finds "
         "likelier (default); expected, both are kept as branches (per member, for the ensemble) and a plan "
-        "scores its expected goal loss (eq. 5) over them; objects planner: the K outcomes of its dynamics "
+        "scores its expected goal loss (eq. 5) over them; objects and hybrid-objects planners: the K "
+        "outcomes of its dynamics "
         "the same way, with their calibrated probabilities",
     )
     parser.add_argument(

@@ -30,12 +30,15 @@ LOG_T = np.linspace(np.log(0.25), np.log(8.0), 401)  # the temperatures tried: 0
 
 @dataclass
 class TemperatureFit:
-    """The temperature fitted, the executions it was fitted on, and their log-loss before and after."""
+    """The temperature fitted, the executions it was fitted on, their log-loss before and after
+    (None where no execution's outcomes differ), and the training step of the checkpoint it
+    was fitted to (a later checkpoint of the run is not calibrated by it)."""
 
     outcome_temperature: float
     executions: int
-    nll_raw: float
-    nll_calibrated: float
+    nll_raw: float | None
+    nll_calibrated: float | None
+    step: int = -1
 
 
 def logits_and_shares(net: ObjectDynamics, t: Transitions) -> tuple[np.ndarray, np.ndarray]:
@@ -62,22 +65,27 @@ def log_loss(logits: np.ndarray, shares: np.ndarray, temperature: float) -> floa
 def fit_temperature(logits: np.ndarray, shares: np.ndarray) -> TemperatureFit:
     """The temperature of least log-loss on a grid (one parameter: a grid is exact enough and
     cannot diverge)."""
-    if len(logits) == 0:
-        return TemperatureFit(1.0, 0, float("nan"), float("nan"))
+    if len(logits) == 0:  # a net of one outcome, or outcomes that never differ: nothing to fit
+        return TemperatureFit(1.0, 0, None, None)
     losses = [log_loss(logits, shares, float(np.exp(lt))) for lt in LOG_T]
     best = float(np.exp(LOG_T[int(np.argmin(losses))]))
     return TemperatureFit(round(best, 4), len(logits), log_loss(logits, shares, 1.0), min(losses))
 
 
 def write_calibration(run: str | Path, fit: TemperatureFit) -> Path:
+    """RUN/calibration.json, which `read_calibration` and export read."""
     path = Path(run) / CALIBRATION_FILE
     path.write_text(json.dumps(asdict(fit), indent=2) + "\n")
     return path
 
 
-def read_calibration(run: str | Path) -> dict:
-    """The config fields a run's calibration sets ({} if it has none), for `afford weights export`."""
+def read_calibration(run: str | Path, step: int | None = None) -> dict:
+    """The config fields a run's calibration sets, for `afford weights export` and loading a
+    run's checkpoint: {} if it has none, or (with `step`) if it was fitted to another step's."""
     path = Path(run) / CALIBRATION_FILE
     if not path.is_file():
         return {}
-    return {"outcome_temperature": json.loads(path.read_text())["outcome_temperature"]}
+    fit = json.loads(path.read_text())
+    if step is not None and fit.get("step") != step:
+        return {}
+    return {"outcome_temperature": fit["outcome_temperature"]}

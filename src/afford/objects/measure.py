@@ -185,7 +185,7 @@ def _f1(truth: np.ndarray, pred: np.ndarray) -> dict:
 
 def _calibration(prob: np.ndarray, correct: np.ndarray, bins: int = 10, least: int = 20) -> dict:
     """Per decile of predicted probability, the share of outcomes that were the nearest to what
-    happened (`_nearest`); the largest gap over deciles holding at least `least` outcomes."""
+    happened (`nearest_share`); the largest gap over deciles holding at least `least` outcomes."""
     edges = np.linspace(0, 1, bins + 1)
     rows = []
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):

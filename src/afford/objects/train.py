@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from afford.data.format import DataError
+from afford.objects.calibration import TemperatureFit
 from afford.objects.dynamics import (
     DynamicsConfig,
     ObjectDynamics,
@@ -112,26 +113,29 @@ def train(
     return state
 
 
-def calibrate(run_dir: str | Path, data_dirs: list[str | Path]):
+def calibrate(run_dir: str | Path, data_dirs: list[str | Path]) -> TemperatureFit:
     """Fit the outcome head's temperature of RUN/best.safetensors on the val splits of
     `data_dirs` into RUN/calibration.json (a re-run of a finished training does only this)."""
     from afford.objects.calibration import fit_temperature, logits_and_shares, write_calibration
+    from afford.training.checkpoint import read_checkpoint
 
-    net = load_dynamics(Path(run_dir) / BEST, calibrated=False)
+    best = Path(run_dir) / BEST
+    net = load_dynamics(best, calibrated=False)
     fit = fit_temperature(*logits_and_shares(net, load(data_dirs, "val")))
+    fit.step = int(read_checkpoint(best, KIND)[1]["step"])
     write_calibration(run_dir, fit)
     return fit
 
 
 def load_dynamics(path: str | Path, calibrated: bool = True) -> ObjectDynamics:
     """A trained dynamics net from a checkpoint or shipped weights file; a training run's
-    checkpoint takes the outcome temperature of its run's calibration.json, if any (a shipped
-    file has it in its config)."""
+    checkpoint takes the outcome temperature its run's calibration.json fitted to that very
+    checkpoint (its step), if any; an exported file has its own in its config."""
     from afford.objects.calibration import read_calibration
     from afford.training.checkpoint import load_net_from_checkpoint
 
-    net, _, _ = load_net_from_checkpoint(path, KIND, DynamicsConfig, ObjectDynamics)
-    if calibrated:
-        for name, value in read_calibration(Path(path).parent).items():
+    net, _, meta = load_net_from_checkpoint(path, KIND, DynamicsConfig, ObjectDynamics)
+    if calibrated and "exported_from" not in meta.get("extra", {}):
+        for name, value in read_calibration(Path(path).parent, step=meta.get("step")).items():
             setattr(net.config, name, value)
     return net

@@ -147,7 +147,9 @@ def with_searched_turns(result: SearchResult, model, goal: Goal, step_deg: float
     plan, best_loss = node.plan, float(node.loss)
     for i in [k for k, a in enumerate(node.plan) if a.turn]:
         plans = [plan[:i] + (plan[i].with_turn(angle),) + plan[i + 1 :] for angle in grid]
-        losses = goal.loss(np.stack([steps[-1][0] for steps in _rolled_out(model, root, plans)]))
+        ends = [Node(p, *steps[-1]) for p, steps in zip(plans, _rolled_out(model, root, plans), strict=True)]
+        # the model's own score, as the tree's nodes have it (expected eq. 5 where it branches)
+        losses = model.score(goal, ends).loss
         k = goal.best(losses)
         if losses[k] < best_loss:
             plan, best_loss = plans[k], float(losses[k])
@@ -157,7 +159,7 @@ def with_searched_turns(result: SearchResult, model, goal: Goal, step_deg: float
     nodes, at = list(result.nodes), 0
     for a, (image, state) in zip(plan, _rolled_out(model, root, [plan])[0], strict=True):
         nodes.append(Node(nodes[at].plan + (a,), image, state, parent=at))
-        nodes[-1].loss, at = float(goal.loss(image[None])[0]), len(nodes) - 1
+        nodes[-1].loss, at = float(model.score(goal, nodes[-1:]).loss[0]), len(nodes) - 1
     seconds = result.seconds + time.perf_counter() - t0
     return SearchResult(nodes, at, seconds, result.expanded, result.per_depth, result.truncated)
 

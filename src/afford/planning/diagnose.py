@@ -88,6 +88,8 @@ def diagnose(
 ) -> Diagnosis:
     """Plan `task` with `planner` (one of PLANNERS) and the oracle, then replay the oracle's
     plan through the planner's world model to name the cause of a failure (module docstring)."""
+    if planner not in PLANNERS:
+        raise ValueError(f"diagnose: planner {planner!r}; expected one of {', '.join(PLANNERS)}")
     config = config or PlannerConfig(search=SearchConfig(progress=False))
     mine = solve(task, planner, scene, config, learned)
     chosen_true = float(task.goal.loss(mine.executed[-1][None])[0])

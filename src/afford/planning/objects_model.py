@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from afford.objects.draw import Drawer
-from afford.objects.dynamics import ObjectDynamics, predict
+from afford.objects.dynamics import ObjectDynamics, Outcomes, predict
 from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
 from afford.objects.state import moved
@@ -32,6 +32,11 @@ from afford.planning.tree import Node, Recognised, Scores, WorldModel
 from afford.recognition.infer import Recognizer
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
+
+# Two outcomes this alike are one next state: the dynamics' own thresholds for an object that
+# did not move (DynamicsConfig.moved, .turned_deg).
+SAME_M = 0.002
+SAME_DEG = 3.0
 
 
 @dataclass
@@ -103,11 +108,20 @@ class ObjectBranches:
 
 class ObjectsBranchingModel(ObjectsModel):
     """The object world model with every outcome of the dynamics kept as a branch; outcomes
-    that put every object in the same place are one branch (their probabilities summed).
-    Recognition runs on the likeliest branch's image, which is also the state's picture."""
+    that put every object in the same place (`_alike`) are one branch, their probabilities
+    summed, drawn from the likeliest of them. Recognition runs on the likeliest branch's
+    image, which is also the state's picture."""
 
-    def __init__(self, *args, risk: float = 0.0, **kwargs):
-        super().__init__(*args, **kwargs)
+    def __init__(
+        self,
+        image: np.ndarray,
+        recognizer: Recognizer,
+        perception: PerceptionNet,
+        dynamics: ObjectDynamics,
+        drawer: Drawer | None = None,
+        risk: float = 0.0,
+    ):
+        super().__init__(image, recognizer, perception, dynamics, drawer)
         self.risk = risk
 
     def root(self):
@@ -120,31 +134,22 @@ class ObjectsBranchingModel(ObjectsModel):
         held = np.array([parents[k].state.branches[b].held for k, b in owner])
         rows = np.stack([encode_affordance(actions[k]) for k, _ in owner])
         outcomes = predict(self.dynamics, before, held, rows)
-        k_out = outcomes.probability.shape[1]
         children, start = [], 0
         for parent in parents:
             mine = range(start, start + len(parent.state.branches))
             start = mine.stop
-            # (probability, row, outcome) of each distinct next state of this parent
-            found: list[list] = []
-            for row in mine:
-                for o in range(k_out):
-                    p = parent.state.probability[row - mine.start] * outcomes.probability[row, o]
-                    twin = next((f for f in found if _same(outcomes, f[1], f[2], row, o)), None)
-                    if twin is None:
-                        found.append([p, row, o])
-                    else:
-                        twin[0] += p
-            probability = np.array([f[0] for f in found])
+            prior = parent.state.probability
+            found = _distinct(outcomes, mine, prior)
+            probability = np.array([f.probability for f in found])
             kept = keep(probability / probability.sum())
             drawn = [
                 self._child(
-                    parent.state.images[row - mine.start],
-                    parent.state.branches[row - mine.start],
-                    outcomes.poses[row, o],
-                    int(outcomes.held[row, o]),
+                    parent.state.images[found[i].row - mine.start],
+                    parent.state.branches[found[i].row - mine.start],
+                    outcomes.poses[found[i].row, found[i].outcome],
+                    int(outcomes.held[found[i].row, found[i].outcome]),
                 )
-                for _, row, o in (found[i] for i in kept)
+                for i in kept
             ]
             p = probability[kept] / probability[kept].sum()
             images = np.stack([image for image, _ in drawn])
@@ -155,8 +160,42 @@ class ObjectsBranchingModel(ObjectsModel):
         return risky_scores(goal, [n.state for n in nodes], self.risk)
 
 
-def _same(outcomes, row: int, o: int, row2: int, o2: int) -> bool:
-    """Whether two outcomes put every object in the same place and hold the same one."""
-    return outcomes.held[row, o] == outcomes.held[row2, o2] and np.array_equal(
-        outcomes.poses[row, o], outcomes.poses[row2, o2], equal_nan=True
-    )
+@dataclass
+class _Next:
+    """One distinct next state of a parent: its probability (summed over the outcomes alike),
+    and the row (the parent's branch) and outcome of the likeliest of them, which is drawn."""
+
+    probability: float
+    row: int
+    outcome: int
+    best: float
+
+
+def _distinct(outcomes: Outcomes, rows: range, prior: np.ndarray) -> list[_Next]:
+    """The distinct next states of the branches `rows` (whose probabilities are `prior`)."""
+    found: list[_Next] = []
+    for row in rows:
+        for o in range(outcomes.probability.shape[1]):
+            p = float(prior[row - rows.start] * outcomes.probability[row, o])
+            twin = next((f for f in found if _alike(outcomes, f.row, f.outcome, row, o)), None)
+            if twin is None:
+                found.append(_Next(p, row, o, p))
+                continue
+            twin.probability += p
+            if p > twin.best:
+                twin.row, twin.outcome, twin.best = row, o, p
+    return found
+
+
+def _alike(outcomes: Outcomes, row: int, o: int, row2: int, o2: int) -> bool:
+    """Whether two outcomes hold the same object and put every object in the same place: the
+    same ones gone, centres within SAME_M, axes within SAME_DEG (two outcomes of a net are never
+    equal to the bit, and drawing both would cost a render for what looks the same)."""
+    a, b = outcomes.poses[row, o], outcomes.poses[row2, o2]
+    gone_a, gone_b = np.isnan(a[:, 0]), np.isnan(b[:, 0])
+    if outcomes.held[row, o] != outcomes.held[row2, o2] or np.any(gone_a != gone_b):
+        return False
+    here = ~gone_a
+    near = np.linalg.norm(a[here, :3] - b[here, :3], axis=-1) <= SAME_M
+    turned = np.abs(np.sum(a[here, 3:7] * b[here, 3:7], axis=-1)) >= np.cos(np.radians(SAME_DEG) / 2)
+    return bool(np.all(near & turned))

@@ -7,6 +7,7 @@ planned states (for pictures), the executed ones, and why a failure failed.
 from __future__ import annotations
 
 from functools import partial
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from afford.planning.uncertain import EnsembleBranchingModel, EnsembleModel
 from afford.sim.affordances import Affordance
 from afford.sim.perturb import Perturbation, piles, reset_perturbed
 from afford.sim.scene import Scene
+
+if TYPE_CHECKING:  # imported where used: the object nets load torch models
+    from afford.planning.objects_model import ObjectsModel
 
 # How the learned planners use a net that foresees several outcomes per step (PlannerConfig.outcomes):
 # carry on the likeliest, or keep them all as branches and score the expected eq. (5).
@@ -132,7 +136,7 @@ def _perceived_sim_search(
 _DRAWER: list = []  # the simulator the objects planner draws its states with
 
 
-def _objects_model(image: np.ndarray, config: PlannerConfig, learned):
+def _objects_model(image: np.ndarray, config: PlannerConfig, learned) -> ObjectsModel:
     """The object world model on `image`: its likeliest outcome carried on, or every outcome a
     branch (PlannerConfig.outcomes)."""
     from afford.objects.draw import Drawer
@@ -401,10 +405,5 @@ CLOSED_LOOP = {
     "objects": _searcher(_objects_search),
     "hybrid-objects": _hybrid_rounds("hybrid-objects"),
 }
-USES_NETS = (
-    "learned",
-    "hybrid",
-    "ensemble",
-    "objects",
-    "hybrid-objects",
-)  # the planners that load the trained nets
+# The planners that load the trained nets.
+USES_NETS = ("learned", "hybrid", "ensemble", "objects", "hybrid-objects")

@@ -16,6 +16,8 @@ DEVIATION = TOLERANCES.position  # this far from its canonical place, an object'
 
 
 def solve_symbolic(task: Task, scene: Scene) -> Outcome:
+    """The symbolic planner's outcome: its plan executed and judged, the others of equal length
+    executed too (the share that succeed), and where physics differed from canonical effects."""
     names = task.object_names()
     result = plan_symbolic(scene, task.scene, names, task.success, task.max_steps)
     if result.plan is None:

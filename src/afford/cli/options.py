@@ -49,11 +49,14 @@ def objects_folder(args) -> str | None:
     folder = getattr(args, "objects_weights", None)
     if folder is None:
         return None
+
+    def holds_a_net(path: Path) -> bool:
+        return any((path / name).is_file() for name in (PERCEPTION_FILE, DYNAMICS_FILE))
+
     path = Path(folder)
-    held = [name for name in (PERCEPTION_FILE, DYNAMICS_FILE) if (path / name).is_file()]
-    if not held and (path / "objects").is_dir():
+    if not holds_a_net(path) and (path / "objects").is_dir():
         path = path / "objects"  # the folder `afford weights export` was given
-    if not any((path / name).is_file() for name in (PERCEPTION_FILE, DYNAMICS_FILE)):
+    if not holds_a_net(path):
         raise CLIError(f"--objects-weights {folder}: no {PERCEPTION_FILE} or {DYNAMICS_FILE} in it")
     return str(path)
 

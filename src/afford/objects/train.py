@@ -117,12 +117,11 @@ def calibrate(run_dir: str | Path, data_dirs: list[str | Path]) -> TemperatureFi
     """Fit the outcome head's temperature of RUN/best.safetensors on the val splits of
     `data_dirs` into RUN/calibration.json (a re-run of a finished training does only this)."""
     from afford.objects.calibration import fit_temperature, logits_and_shares, write_calibration
-    from afford.training.checkpoint import read_checkpoint
+    from afford.training.checkpoint import load_net_from_checkpoint
 
-    best = Path(run_dir) / BEST
-    net = load_dynamics(best, calibrated=False)
+    net, _, meta = load_net_from_checkpoint(Path(run_dir) / BEST, KIND, DynamicsConfig, ObjectDynamics)
     fit = fit_temperature(*logits_and_shares(net, load(data_dirs, "val")))
-    fit.step = int(read_checkpoint(best, KIND)[1]["step"])
+    fit.step = int(meta["step"])
     write_calibration(run_dir, fit)
     return fit
 

@@ -6,7 +6,7 @@ planned states (for pictures), the executed ones, and why a failure failed.
 
 from __future__ import annotations
 
-from functools import partial
+from functools import cache, partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -136,18 +136,24 @@ def _perceived_sim_search(
 _DRAWER: list = []  # the simulator the objects planner draws its states with
 
 
+@cache
+def _object_nets(folder: str | None) -> tuple:
+    """The object perception and dynamics nets of a weights folder, each the shipped one where
+    the folder lacks it; loaded once, since a closed loop builds its world model every round."""
+    from afford.shipped import load_object_dynamics, load_object_perception
+
+    return load_object_perception(folder, fallback=True), load_object_dynamics(folder, fallback=True)
+
+
 def _objects_model(image: np.ndarray, config: PlannerConfig, learned) -> ObjectsModel:
     """The object world model on `image`: its likeliest outcome carried on, or every outcome a
     branch (PlannerConfig.outcomes)."""
     from afford.objects.draw import Drawer
     from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
-    from afford.shipped import load_object_dynamics, load_object_perception
 
     if not _DRAWER:
         _DRAWER.append(Drawer())
-    folder = config.objects_weights
-    perception = load_object_perception(folder, fallback=True)
-    dynamics = load_object_dynamics(folder, fallback=True)
+    perception, dynamics = _object_nets(config.objects_weights)
     parts = (image, _nets(learned).recognizer, perception, dynamics, _DRAWER[0])
     if config.outcomes == "expected":
         return ObjectsBranchingModel(*parts, risk=config.risk)

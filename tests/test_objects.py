@@ -19,12 +19,15 @@ from afford.objects.dynamics import (
     ObjectDynamics,
     encode_inputs,
     encode_targets,
+    foresight_inputs,
+    frame_coordinates,
     mirror,
     mixture_loss,
     predict,
 )
-from afford.objects.state import axes_quat, quat_axes, slot_features
+from afford.objects.state import KINDS, N_SLOTS, SLOT_KIND, axes_quat, quat_axes, slot_features
 from afford.objects.transitions import read_transitions
+from afford.sim.affordance import AFF_WIDTH, Col
 from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
 
 TINY = dataclasses.replace(PRESETS["tiny"], threads=1)
@@ -104,17 +107,20 @@ def test_features_mark_absent_and_held_objects(pose_dataset):
         assert f[i, t.held_before[i], 1] == 1 and f[i, :, 1].sum() == 1
 
 
-def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset):
+@pytest.mark.parametrize("frames", [False, True])
+def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset, frames):
     torch.manual_seed(0)
     t = read_transitions(pose_dataset)
-    config = dataclasses.replace(TINY, arm_path=True, outcomes=2)
+    config = dataclasses.replace(TINY, arm_path=True, outcomes=2, frames=frames)
     net = ObjectDynamics(config)
     inputs = encode_inputs(t.before, t.held_before, t.actions, t.paths, config)
     targets = encode_targets(t.before, t.after, t.held_after, config)
+    targets["path"] = inputs["path"]
     out = net(inputs)
     n, s = t.before.shape[:2]
     assert out["dpos"].shape == (n, s, 2, 3) and out["outcome"].shape == (n, 2)
     opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+    first_path = mixture_loss(net(inputs), targets, config.spread)[1]["path"]
     losses = []
     for _ in range(60):
         loss, _ = mixture_loss(net(inputs), targets, config.spread)
@@ -124,6 +130,40 @@ def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset):
         opt.step()
     assert all(p.grad is not None for p in net.parameters())
     assert losses[-1] < 0.5 * losses[0]
+    # Without a recorded path the net foresees one (as a planner needs), and its foresight
+    # learned too.
+    _, parts = mixture_loss(net(inputs), targets, config.spread)
+    assert parts["path"] < first_path
+    foreseen = predict(net, t.before, t.held_before, t.actions)
+    assert foreseen.poses.shape == (n, 2, s, 7)
+
+
+def test_frame_coordinates_follow_the_object():
+    # A block along y (turned a quarter about z): a point 3 cm further along y lies 3 cm along
+    # its length; one 2 cm above, 2 cm up its axis; turning the block turns nothing else.
+    quarter = np.array([np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)])
+    up, along = quat_axes(quarter)
+    offsets = np.array([[0.0, 0.03, 0.0], [0.0, 0.0, 0.02], [0.01, 0.0, 0.0]])
+    got = frame_coordinates(offsets, up, along)
+    np.testing.assert_allclose(got, [[0.03, 0, 0], [0, 0, 0.02], [0, -0.01, 0]], atol=1e-12)
+
+
+def test_the_arm_foresight_reads_what_a_grasp_closes_on():
+    # A ball 1 cm from a grasp's point, a cup 10 cm off, the block held in the other row.
+    before = np.full((2, N_SLOTS, 7), np.nan)
+    ball, cup, block = (int(np.flatnonzero(SLOT_KIND == KINDS.index(k))[0]) for k in ("ball", "cup", "block"))
+    before[:, ball] = [0.50, 0.00, 0.03, 1, 0, 0, 0]
+    before[:, cup] = [0.60, 0.00, 0.05, 1, 0, 0, 0]
+    before[1, block] = [0.40, 0.10, 0.30, 1, 0, 0, 0]
+    actions = np.zeros((2, AFF_WIDTH), np.float32)
+    actions[:, Col.POSITION] = [0.51, 0.00, 0.03]
+    f = foresight_inputs(before, np.array([-1, block]), actions)
+    kinds = 1 + len(KINDS)
+    held, under = f[:, -2 * kinds : -kinds], f[:, -kinds:]
+    assert held[0].argmax() == 0 and held[1].argmax() == 1 + KINDS.index("block")
+    assert under[0].argmax() == 1 + KINDS.index("ball") and under[1].argmax() == 1 + KINDS.index("ball")
+    actions[:, Col.X] = 0.30  # nothing within the grasp radius
+    assert foresight_inputs(before, np.array([-1, block]), actions)[:, -kinds:].argmax(1).tolist() == [0, 0]
 
 
 def test_the_gate_copies_still_objects_exactly(pose_dataset):

@@ -64,9 +64,11 @@ def cmd_eval_dynamics(args) -> int:
         predictor = simulator_predictor()
     else:
         net = load_dynamics(args.weights)
-        if net.config.arm_path and t.paths.size and (t.paths != t.paths).any():
-            raise CLIError(f"{args.data}: no arm paths recorded, and {args.weights} takes them as input")
-        predictor = net_predictor(net)
+        if args.recorded_arm_path and not net.config.arm_path:
+            raise CLIError(f"--recorded-arm-path: {args.weights} does not take the arm's path")
+        if args.recorded_arm_path and t.paths.size and (t.paths != t.paths).any():
+            raise CLIError(f"{args.data}: no arm paths recorded, and --recorded-arm-path asks for them")
+        predictor = net_predictor(net, recorded_paths=args.recorded_arm_path)
     before, seen_by = None, "true"
     if args.perception:
         before, seen_by = perceived_starts(args.perception, args.data, t), str(args.perception)
@@ -293,6 +295,12 @@ def add_eval_parser(esub) -> None:
         "images and masks) instead of the true states",
     )
     p.add_argument("--pictures", metavar="FILE.png", help="draw 8 executions with side effects here")
+    p.add_argument(
+        "--recorded-arm-path",
+        action="store_true",
+        help="give a net that takes the arm's path the recorded one, not its own foresight (a "
+        "diagnostic: a planner has only the foresight)",
+    )
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_eval_dynamics)
 

@@ -57,9 +57,12 @@ def pixel_error(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
 Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], Outcomes]
 
 
-def net_predictor(net: ObjectDynamics) -> Predictor:
+def net_predictor(net: ObjectDynamics, recorded_paths: bool = False) -> Predictor:
+    """A dynamics net as a world model's dynamics. One that takes the arm's path foresees it,
+    as in planning, unless `recorded_paths` (a diagnostic: what a perfect foresight gives)."""
+
     def run(before, held, actions, paths):
-        return predict(net, before, held, actions, paths if net.config.arm_path else None)
+        return predict(net, before, held, actions, paths if net.config.arm_path and recorded_paths else None)
 
     return run
 

@@ -48,7 +48,10 @@ def batch_of(t: Transitions, rows: np.ndarray, config: DynamicsConfig, rng: np.r
         seen = before.copy()
         seen[..., :3] += rng.normal(0.0, config.input_noise, seen[..., :3].shape)
     inputs = encode_inputs(seen, t.held_before[rows], actions, paths if config.arm_path else None, config)
-    return inputs, encode_targets(seen, after, t.held_after[rows], config)
+    targets = encode_targets(seen, after, t.held_after[rows], config)
+    if config.arm_path:  # the recorded path is both an input and what the foresight learns
+        targets["path"] = inputs["path"]
+    return inputs, targets
 
 
 def load(data_dirs: list[str | Path], split: str) -> Transitions:

@@ -60,8 +60,6 @@ class ObjectsModel(WorldModel):
         dynamics: ObjectDynamics,
         drawer: Drawer | None = None,
     ):
-        if dynamics.config.arm_path:
-            raise ValueError("the planner's dynamics net must not need the arm's path: it is not known ahead")
         self.image = np.asarray(image, dtype=np.float32)
         self.recognizer = recognizer
         self.perception = perception

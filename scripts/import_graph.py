@@ -22,7 +22,7 @@ LAYERS = (
     ("afford.data", "afford.training", "afford.viz"),
     ("afford.recognition", "afford.prediction", "afford.words", "afford.objects", "afford.shipped"),
     ("afford.planning",),
-    ("afford.cli", "afford.__main__"),
+    ("afford.cli",),
 )
 
 

@@ -50,6 +50,7 @@ def cmd_train_dynamics(args) -> int:
 
 
 def cmd_eval_dynamics(args) -> int:
+    from afford.objects.ensemble import DynamicsEnsemble
     from afford.objects.measure import measure, net_predictor, simulator_predictor, table
     from afford.objects.train import load_dynamics
     from afford.objects.transitions import read_transitions
@@ -63,9 +64,11 @@ def cmd_eval_dynamics(args) -> int:
     if args.simulator:
         predictor = simulator_predictor()
     else:
-        net = load_dynamics(args.weights)
-        if args.recorded_arm_path and not net.config.arm_path:
-            raise CLIError(f"--recorded-arm-path: {args.weights} does not take the arm's path")
+        nets = [load_dynamics(w) for w in args.weights]
+        for w, n in zip(args.weights, nets, strict=True):
+            if args.recorded_arm_path and not n.config.arm_path:
+                raise CLIError(f"--recorded-arm-path: {w} does not take the arm's path")
+        net = nets[0] if len(nets) == 1 else DynamicsEnsemble(nets)
         if args.recorded_arm_path and t.paths.size and (t.paths != t.paths).any():
             raise CLIError(f"{args.data}: no arm paths recorded, and --recorded-arm-path asks for them")
         predictor = net_predictor(net, recorded_paths=args.recorded_arm_path)
@@ -76,7 +79,7 @@ def cmd_eval_dynamics(args) -> int:
     if args.pictures:
         report["pictures"] = dynamics_pictures(predictor, t, before, args.pictures)
     report = {
-        "model": "simulator" if args.simulator else str(args.weights),
+        "model": "simulator" if args.simulator else " + ".join(map(str, args.weights)),
         "data": str(args.data),
         "split": args.split,
         "start": seen_by,
@@ -272,7 +275,13 @@ def add_eval_parser(esub) -> None:
         "shares within 3 px and 0.5 px, the best of the K outcomes; beside copying the start. Also the "
         "off-the-table F1 and the calibration of the outcomes' probabilities.",
     )
-    p.add_argument("--weights", metavar="FILE", help="a dynamics checkpoint or weights file")
+    p.add_argument(
+        "--weights",
+        nargs="+",
+        metavar="FILE",
+        help="a dynamics checkpoint or weights file; several: an ensemble, their predictions fused "
+        "object by object (objects/ensemble.py)",
+    )
     p.add_argument(
         "--simulator",
         action="store_true",

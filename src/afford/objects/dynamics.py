@@ -161,6 +161,12 @@ class ObjectDynamics(nn.Module):
         if config.arm_path:
             self.foresee = _mlp(FORESIGHT_FEATURES, 2 * config.hidden, PATH_POINTS * PATH_OUT)
 
+    def outcomes(
+        self, before: np.ndarray, held: np.ndarray, actions: np.ndarray, paths: np.ndarray | None = None
+    ) -> Outcomes:
+        """`predict` with this net: what every world model's dynamics answer (`ensemble.py` too)."""
+        return predict(self, before, held, actions, paths)
+
     def forward(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         out: dict[str, torch.Tensor] = {}
         nodes = batch["nodes"]

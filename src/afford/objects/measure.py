@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from afford.data.effects import KINDS as EFFECT_KINDS
-from afford.objects.dynamics import ObjectDynamics, Outcomes, predict
+from afford.objects.dynamics import ObjectDynamics, Outcomes
+from afford.objects.ensemble import Dynamics, DynamicsEnsemble
 from afford.objects.transitions import Transitions
 from afford.sim.affordances import TYPES
 from afford.sim.camera import world_to_pixel
@@ -57,12 +58,13 @@ def pixel_error(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
 Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], Outcomes]
 
 
-def net_predictor(net: ObjectDynamics, recorded_paths: bool = False) -> Predictor:
-    """A dynamics net as a world model's dynamics. One that takes the arm's path foresees it,
-    as in planning, unless `recorded_paths` (a diagnostic: what a perfect foresight gives)."""
+def net_predictor(net: Dynamics, recorded_paths: bool = False) -> Predictor:
+    """A dynamics net (or an ensemble of them) as a world model's dynamics. One that takes the
+    arm's path foresees it, as in planning, unless `recorded_paths` (a diagnostic: what a
+    perfect foresight gives); a net that takes no path ignores it."""
 
     def run(before, held, actions, paths):
-        return predict(net, before, held, actions, paths if net.config.arm_path and recorded_paths else None)
+        return net.outcomes(before, held, actions, paths if recorded_paths else None)
 
     return run
 
@@ -93,9 +95,9 @@ def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None 
     )
 
 
-def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
+def measure(predictor: Predictor | Dynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
     """The dynamics report on the executions `t` (see the module's docstring)."""
-    if isinstance(predictor, ObjectDynamics):
+    if isinstance(predictor, ObjectDynamics | DynamicsEnsemble):
         predictor = net_predictor(predictor)
     outcomes = predict_all(predictor, t, before)
     likely, _ = outcomes.likeliest()

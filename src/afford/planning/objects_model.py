@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from afford.objects.draw import Drawer
-from afford.objects.dynamics import ObjectDynamics, Outcomes, predict
+from afford.objects.dynamics import Outcomes
+from afford.objects.ensemble import Dynamics
 from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
 from afford.objects.state import moved
@@ -57,7 +58,7 @@ class ObjectsModel(WorldModel):
         image: np.ndarray,
         recognizer: Recognizer,
         perception: PerceptionNet,
-        dynamics: ObjectDynamics,
+        dynamics: Dynamics,
         drawer: Drawer | None = None,
     ):
         self.image = np.asarray(image, dtype=np.float32)
@@ -79,7 +80,7 @@ class ObjectsModel(WorldModel):
         before = np.stack([p.state.poses for p in parents])
         held = np.array([p.state.held for p in parents])
         rows = np.stack([encode_affordance(a) for a in actions])
-        poses, held_next = predict(self.dynamics, before, held, rows).likeliest()
+        poses, held_next = self.dynamics.outcomes(before, held, rows).likeliest()
         return [
             self._child(parent.image, parent.state, poses[k], int(held_next[k]))
             for k, parent in enumerate(parents)
@@ -115,7 +116,7 @@ class ObjectsBranchingModel(ObjectsModel):
         image: np.ndarray,
         recognizer: Recognizer,
         perception: PerceptionNet,
-        dynamics: ObjectDynamics,
+        dynamics: Dynamics,
         drawer: Drawer | None = None,
         risk: float = 0.0,
     ):
@@ -131,7 +132,7 @@ class ObjectsBranchingModel(ObjectsModel):
         before = np.stack([parents[k].state.branches[b].poses for k, b in owner])
         held = np.array([parents[k].state.branches[b].held for k, b in owner])
         rows = np.stack([encode_affordance(actions[k]) for k, _ in owner])
-        outcomes = predict(self.dynamics, before, held, rows)
+        outcomes = self.dynamics.outcomes(before, held, rows)
         children, start = [], 0
         for parent in parents:
             mine = range(start, start + len(parent.state.branches))

@@ -35,6 +35,23 @@ def test_a_two_step_plan_is_found_and_its_states_are_drawn(scene):
     assert len({id(n.state) for n in result.nodes}) == len(result.nodes)
 
 
+def test_the_true_start_is_the_simulators_objects_and_plans_the_task(scene):
+    from afford.data.draws import pose_array
+    from afford.planning.objects_model import TrueStartModel
+
+    task = load_task(TASK)
+    scene.reset(task.scene)
+    poses, mask = pose_array(scene), scene.instance_mask()
+    nets = (load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer())
+    model = TrueStartModel(scene.observe(), *nets, poses, -1, mask)
+    _, state = model.root()
+    np.testing.assert_array_equal(state.poses, poses)
+    assert state.held == -1 and model.seen.shape[0] == len(poses)
+    np.testing.assert_array_equal(model.seen.any(0), mask >= 0)
+    outcome = solve(task, "objects-true", scene)
+    assert outcome.success and [a.type for a in outcome.plan] == ["grasp", "place"]
+
+
 def test_every_outcome_kept_as_a_branch_still_finds_the_plan(scene):
     task = load_task(TASK)
     scene.reset(task.scene)

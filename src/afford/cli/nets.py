@@ -92,7 +92,9 @@ def cmd_eval(args) -> int:
         from afford.shipped import OBJECTS, load_object_dynamics, load_object_perception
 
         source = OBJECTS if args.objects == "shipped" else Path(args.objects)
-        world = ObjectRollout(load_object_perception(source), load_object_dynamics(source))
+        world = ObjectRollout(
+            load_object_perception(source, fallback=True), load_object_dynamics(source, fallback=True)
+        )
         folder = Path(args.out)
         recognizer = None if args.no_futures else load_nets(args.recognition).recognizer
         result = evaluate_world(
@@ -324,7 +326,8 @@ def add_parsers(sub) -> None:
         nargs="?",
         const="shipped",
         metavar="DIR",
-        help="evaluate the object world model (perception.safetensors and dynamics.safetensors in DIR; "
+        help="evaluate the object world model (perception.safetensors and dynamics.safetensors in DIR, "
+        "a net DIR lacks the shipped one, and dynamics members in DIR/ensemble/ judged together; "
         "without DIR the shipped ones) instead of a prediction net, on the same measures",
     )
     f = esub.add_parser(

@@ -19,7 +19,16 @@ def cmd_train_dynamics(args) -> int:
     if args.fraction is not None and not 0 < args.fraction <= 1:
         raise CLIError(f"--fraction must be in (0, 1], not {args.fraction}")
     try:
-        state = train([args.data, *(args.more_data or [])], config, args.out, not args.json, args.fraction)
+        state = train(
+            [args.data, *(args.more_data or [])],
+            config,
+            args.out,
+            not args.json,
+            args.fraction,
+            perceived_dirs=args.perceived_data or (),
+            perception=args.perception,
+            init=args.init,
+        )
     except KeyboardInterrupt:
         print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
         return 130
@@ -118,31 +127,16 @@ def dynamics_pictures(predictor, t, before, out: str, count: int = 8) -> str:
 
 
 def perceived_starts(perception: str, data_dir: str, t):
-    """Each execution's start state as the perception net sees it in the start image, its
-    objects in the slots of the true objects they match (`perception_measure.aligned_state`)."""
-    import numpy as np
-
-    from afford.data.format import Dataset
-    from afford.objects.perceive import perceive
-    from afford.objects.perception_measure import aligned_state
+    """Each execution's start state as the perception net sees it (`perception_measure`); the
+    held slots it sees replace `t`'s."""
+    from afford.data.format import DataError, Dataset
+    from afford.objects.perception_measure import perceived_starts as seen_starts
     from afford.objects.perception_train import load_perception
 
-    net = load_perception(perception)
-    data = Dataset(data_dir)
-    before = np.full_like(t.before, np.nan)
-    held = np.full_like(t.held_before, -1)
-    for start in range(0, len(t), 256):
-        rows = range(start, min(start + 256, len(t)))
-        seqs = [data.sequence(int(t.sequence[r])) for r in rows]
-        steps = [int(t.step[r]) for r in rows]
-        seen = perceive(net, np.stack([s.image(k) for s, k in zip(seqs, steps, strict=True)]))
-        for r, s, k, objects in zip(rows, seqs, steps, seen, strict=True):
-            if s.masks is None:
-                raise CLIError(
-                    f"{data_dir}: no instance masks, needed to match perceived objects to true ones"
-                )
-            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k])
-    t.held_before = held
+    try:
+        before, t.held_before = seen_starts(load_perception(perception), Dataset(data_dir), t)
+    except DataError as e:
+        raise CLIError(str(e)) from None
     return before
 
 
@@ -227,6 +221,22 @@ def add_train_parser(tsub) -> None:
     p.add_argument("--data", required=True, metavar="DIR", help="a dataset (its val split validates)")
     p.add_argument(
         "--more-data", action="append", metavar="DIR", help="also train on this dataset's train split"
+    )
+    p.add_argument(
+        "--perceived-data",
+        action="append",
+        metavar="DIR",
+        help="also train on this dataset's executions (it needs images and instance masks) started from "
+        "the objects the perception net sees in each start image, as a planner starts: a share "
+        "(perceived_share, default 0.25) of each batch; repeatable",
+    )
+    p.add_argument(
+        "--perception",
+        metavar="FILE",
+        help="the perception net for --perceived-data (default: the shipped one)",
+    )
+    p.add_argument(
+        "--init", metavar="FILE", help="a new run starts from these dynamics weights (fine-tuning)"
     )
     p.add_argument("--out", required=True, metavar="RUN", help="run folder (checkpoints, logs)")
     p.add_argument("--preset", choices=tuple(PRESETS), default="cpu")

@@ -6,7 +6,7 @@ from afford.cli.errors import CLIError
 
 PLANNERS_HELP = (
     "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble, perceived-sim, objects, "
-    "hybrid-objects), "
+    "hybrid-objects, objects-true), "
     "several as a comma list, or all"
 )
 MAX_NODES_HELP = (
@@ -35,8 +35,9 @@ def add_objects_weights_argument(parser) -> None:
         metavar="DIR",
         help="objects, hybrid-objects and perceived-sim planners (and diagnose --planner objects): a "
         "folder with perception.safetensors and/or "
-        "dynamics.safetensors (as `afford weights export objects/...` writes them); a net the folder "
-        "lacks is the shipped one (default: both shipped)",
+        "dynamics.safetensors (as `afford weights export objects/...` writes them), and more dynamics "
+        "nets in its ensemble/ to judge together with it; a net the folder lacks is the shipped one "
+        "(default: both shipped)",
     )
 
 

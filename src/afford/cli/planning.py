@@ -282,7 +282,8 @@ def add_parsers(sub) -> None:
         "nets, each plan scored by its members' mean goal loss plus --risk standard deviations), "
         "perceived-sim (the simulator run on the objects perception sees), objects (the object world model: "
         "objects perceived, moved by learned dynamics and drawn), hybrid-objects (canonical plans checked by "
-        "the object world model). Writes a "
+        "the object world model), objects-true (the object world model started from the simulator's true "
+        "objects: beside objects, what perception costs). Writes a "
         "picture like the paper's Fig. 8 and a JSON record. Exit status 1 when the executed plan misses "
         "the goal.",
     )

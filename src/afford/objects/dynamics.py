@@ -82,6 +82,9 @@ class DynamicsConfig:
     rare_weight: float = 1.0  # weight of an object that moves or leaves the table in the gate's loss
     moved: float = 0.002  # metres: an object that moved less than this counts as still
     turned_deg: float = 3.0  # ... and whose axes turned less than this
+    # The share of each batch drawn from executions started from the state the perception net
+    # sees (`afford train dynamics --perceived-data`), when there are any.
+    perceived_share: float = 0.25
     # The outcome head's logits are divided by this (objects/calibration.py: fitted on val
     # after training; 1: as trained).
     outcome_temperature: float = 1.0

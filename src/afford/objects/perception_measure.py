@@ -54,6 +54,28 @@ def aligned_state(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray
     return out, held
 
 
+def perceived_starts(net: PerceptionNet, data: Dataset, t) -> tuple[np.ndarray, np.ndarray]:
+    """Each execution of `t` (Transitions of `data`) started from the state the perception net
+    sees in its start image: poses (N, slots, 7) in the slots of the true objects they match
+    (NaN: not found) and held slots (N,). The dataset needs images and instance masks."""
+    from afford.data.format import DataError
+
+    before = np.full_like(t.before, np.nan)
+    held = np.full_like(t.held_before, -1)
+    for start in range(0, len(t), SPEED_BATCH):
+        rows = range(start, min(start + SPEED_BATCH, len(t)))
+        seqs = [data.sequence(int(t.sequence[r])) for r in rows]
+        steps = [int(t.step[r]) for r in rows]
+        seen = perceive(net, np.stack([s.image(k) for s, k in zip(seqs, steps, strict=True)]))
+        for r, s, k, objects in zip(rows, seqs, steps, seen, strict=True):
+            if s.masks is None:
+                raise DataError(
+                    f"{data.root}: no instance masks, needed to match perceived objects to true ones"
+                )
+            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k])
+    return before, held
+
+
 def measure_perception(
     net: PerceptionNet, data: Dataset, split: str | None, limit: int | None = None
 ) -> dict:

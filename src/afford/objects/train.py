@@ -62,16 +62,53 @@ def load(data_dirs: list[str | Path], split: str) -> Transitions:
     return t
 
 
+def load_perceived(data_dirs: list[str | Path], perception: str | Path | None, split: str) -> Transitions:
+    """The executions of datasets with images, each started from the objects the perception net
+    (default: the shipped one) finds in its start image, as a planner starts: an object it
+    misses (a support hidden under a block) is absent, and where it went is not learned. The
+    objects it finds keep their true poses: the gate still learns that an object nothing moved
+    stays exactly where it was, which a few millimetres of perceived error would blur."""
+    from afford.data.format import Dataset
+    from afford.objects.perception_measure import perceived_starts
+    from afford.shipped import load_object_perception
+
+    net = load_object_perception(None) if perception is None else _perception(perception)
+    parts = []
+    for d in data_dirs:
+        t = read_transitions(d, split)
+        seen, _ = perceived_starts(net, Dataset(d), t)
+        missed = np.isnan(seen[..., :1])
+        t.before = np.where(missed, np.nan, t.before).astype(t.before.dtype)
+        rows = np.arange(len(t))
+        held = t.held_before.astype(np.int64)
+        t.held_before = np.where((held >= 0) & ~missed[rows, np.maximum(held, 0), 0], held, -1).astype(
+            t.held_before.dtype
+        )
+        parts.append(t)
+    return Transitions.concatenate(parts)
+
+
+def _perception(path: str | Path):
+    from afford.objects.perception_train import load_perception
+
+    return load_perception(path)
+
+
 def train(
     data_dirs: list[str | Path],
     config: DynamicsConfig,
     run_dir: str | Path,
     progress: bool = True,
     limit: float | None = None,
+    perceived_dirs: list[str | Path] = (),
+    perception: str | Path | None = None,
+    init: str | Path | None = None,
 ) -> LoopState:
     """Train into `run_dir` (resuming from its last checkpoint) on the train splits of
     `data_dirs`, validating on the first's val split; `limit`: use only this share of the
-    training executions (a learning curve)."""
+    training executions (a learning curve). With `perceived_dirs`, `config.perceived_share` of
+    each batch comes from their executions started from perceived states (`load_perceived`);
+    `init`: a new run starts from these weights (fine-tuning)."""
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
     rng = np.random.default_rng(config.seed)
@@ -79,6 +116,12 @@ def train(
     if limit is not None:
         keep = np.random.default_rng(0).permutation(len(train_set))[: max(1, int(limit * len(train_set)))]
         train_set = train_set.subset(np.sort(keep))
+    n_true = len(train_set)
+    n_perceived = round(config.batch * config.perceived_share) if perceived_dirs else 0
+    if n_perceived:
+        train_set = Transitions.concatenate(
+            [train_set, load_perceived(list(perceived_dirs), perception, "train")]
+        )
     val_set = load(data_dirs[:1], "val")
     val_rows = np.linspace(0, len(val_set) - 1, min(VAL_EXECUTIONS, len(val_set))).astype(int)
     val_batch = batch_of(val_set, val_rows, config, None)
@@ -87,8 +130,11 @@ def train(
 
     class Batches:
         def __iter__(self):
-            for _ in range(max(1, len(train_set) // config.batch)):
-                yield batch_of(train_set, rng.integers(0, len(train_set), config.batch), config, rng)
+            for _ in range(max(1, n_true // config.batch)):
+                rows = rng.integers(0, n_true, config.batch - n_perceived)
+                if n_perceived:
+                    rows = np.concatenate([rows, rng.integers(n_true, len(train_set), n_perceived)])
+                yield batch_of(train_set, rows, config, rng)
 
     def train_step(batch):
         inputs, targets = batch
@@ -107,10 +153,13 @@ def train(
         train_step=train_step,
         validate=validate,
         lr_at=warmup_cosine(config.warmup, config.steps),
+        init=init,
     )
     state = run(loop, run_dir, progress)
     (Path(run_dir) / "data.txt").write_text(
-        "".join(f"{d}\n" for d in data_dirs) + f"training executions: {len(train_set)}\n"
+        "".join(f"{d}\n" for d in data_dirs)
+        + "".join(f"{d} (from perceived starts)\n" for d in perceived_dirs)
+        + f"training executions: {len(train_set)}\n"
     )
     calibrate(run_dir, data_dirs)
     return state

@@ -95,6 +95,31 @@ class ObjectsModel(WorldModel):
         return child, ObjectsState(poses, held, drawn, state.as_seen & ~go)
 
 
+class TrueStartModel(ObjectsModel):
+    """The object world model started from the simulator's true objects (their poses, the held
+    slot and the instance mask of the start image) instead of the perceived ones: a diagnostic
+    (`--planner objects-true`) that, beside `objects`, tells what perception costs a plan."""
+
+    def __init__(
+        self,
+        image: np.ndarray,
+        recognizer: Recognizer,
+        perception: PerceptionNet,
+        dynamics: Dynamics,
+        drawer: Drawer | None,
+        poses: np.ndarray,
+        held: int,
+        mask: np.ndarray,
+    ):
+        super().__init__(image, recognizer, perception, dynamics, drawer)
+        self.true = (np.asarray(poses, np.float32), int(held), np.asarray(mask))
+
+    def root(self):
+        poses, held, mask = self.true
+        self.seen = np.stack([mask == slot for slot in range(len(poses))])
+        return self.image, ObjectsState(poses, held, self.drawer.render(poses, held), self.seen.any((1, 2)))
+
+
 @dataclass
 class ObjectBranches:
     """A state's alternatives, likeliest first: their probabilities (n,), summing to 1, each

@@ -176,6 +176,30 @@ def _objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcom
     return _judge(task, "objects", _objects_search(task, scene, config, learned, task.max_steps), scene)
 
 
+def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    """The object world model's search started from the true objects, not the perceived ones."""
+    from afford.data.draws import pose_array
+    from afford.objects.draw import Drawer
+    from afford.planning.objects_model import TrueStartModel
+
+    scene.reset(task.scene)
+    if not _DRAWER:
+        _DRAWER.append(Drawer())
+    perception, dynamics = _object_nets(config.objects_weights)
+    held = [name for name, _ in scene.slots].index(scene.held) if scene.held else -1
+    model = TrueStartModel(
+        scene.observe(),
+        _nets(learned).recognizer,
+        perception,
+        dynamics,
+        _DRAWER[0],
+        pose_array(scene),
+        held,
+        scene.instance_mask(),
+    )
+    return _judge(task, "objects-true", search(model, task.goal, task.max_steps, config.search), scene)
+
+
 def _perceived_sim(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     scene.reset(task.scene)
     return _judge(
@@ -397,6 +421,7 @@ PLANNER_REGISTRY = {
     "perceived-sim": _perceived_sim,  # the simulator run from perceived objects (objects/simulated.py)
     "objects": _objects,  # the object world model: objects perceived, moved by learned dynamics, drawn
     "hybrid-objects": _hybrid_objects,  # canonical proposals checked by the object world model
+    "objects-true": _objects_true,  # the object world model from the true objects: what perception costs
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
 # Each planner that can plan again from an observed state: (task, scene, config, learned nets

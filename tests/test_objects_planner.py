@@ -43,7 +43,7 @@ def test_the_true_start_is_the_simulators_objects_and_plans_the_task(scene):
     scene.reset(task.scene)
     poses, mask = pose_array(scene), scene.instance_mask()
     nets = (load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer())
-    model = TrueStartModel(scene.observe(), *nets, poses, -1, mask)
+    model = TrueStartModel(scene.observe(), *nets, poses=poses, held=-1, mask=mask)
     _, state = model.root()
     np.testing.assert_array_equal(state.poses, poses)
     assert state.held == -1 and model.seen.shape[0] == len(poses)

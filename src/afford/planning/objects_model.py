@@ -100,18 +100,10 @@ class TrueStartModel(ObjectsModel):
     slot and the instance mask of the start image) instead of the perceived ones: a diagnostic
     (`--planner objects-true`) that, beside `objects`, tells what perception costs a plan."""
 
-    def __init__(
-        self,
-        image: np.ndarray,
-        recognizer: Recognizer,
-        perception: PerceptionNet,
-        dynamics: Dynamics,
-        drawer: Drawer | None,
-        poses: np.ndarray,
-        held: int,
-        mask: np.ndarray,
-    ):
-        super().__init__(image, recognizer, perception, dynamics, drawer)
+    def __init__(self, *model, poses: np.ndarray, held: int, mask: np.ndarray):
+        """`model`: `ObjectsModel`'s arguments; the true start: pose rows per slot, the held
+        slot (-1: none) and the start image's instance mask (slot per pixel, -1: none)."""
+        super().__init__(*model)
         self.true = (np.asarray(poses, np.float32), int(held), np.asarray(mask))
 
     def root(self):

@@ -187,15 +187,9 @@ def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> O
         _DRAWER.append(Drawer())
     perception, dynamics = _object_nets(config.objects_weights)
     held = [name for name, _ in scene.slots].index(scene.held) if scene.held else -1
+    nets = (_nets(learned).recognizer, perception, dynamics, _DRAWER[0])
     model = TrueStartModel(
-        scene.observe(),
-        _nets(learned).recognizer,
-        perception,
-        dynamics,
-        _DRAWER[0],
-        pose_array(scene),
-        held,
-        scene.instance_mask(),
+        scene.observe(), *nets, poses=pose_array(scene), held=held, mask=scene.instance_mask()
     )
     return _judge(task, "objects-true", search(model, task.goal, task.max_steps, config.search), scene)
 

@@ -13,9 +13,11 @@ from afford.data.generate import GenerateConfig, generate
 from afford.objects.dynamics import PRESETS
 from afford.objects.train import load_perceived, train
 from afford.objects.transitions import read_transitions
+from afford.shipped import OBJECTS, PERCEPTION_FILE
 from afford.training.checkpoint import read_checkpoint
 
 TINY = dataclasses.replace(PRESETS["tiny"], threads=1)
+SHIPPED_PERCEPTION = OBJECTS / PERCEPTION_FILE
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +29,7 @@ def masked(tmp_path_factory):
 
 def test_perceived_starts_keep_true_poses_of_what_is_found(masked):
     truth = read_transitions(masked)
-    seen = load_perceived([masked], None, None)
+    seen = load_perceived([masked], SHIPPED_PERCEPTION, None)
     assert len(seen) == len(truth)
     found = ~np.isnan(seen.before[..., 0])
     # the shipped net finds most objects of these scenes, each at its true pose exactly
@@ -45,7 +47,7 @@ def test_perceived_starts_keep_true_poses_of_what_is_found(masked):
 def test_training_draws_a_share_of_each_batch_from_perceived_starts(masked, tmp_path):
     config = dataclasses.replace(TINY, perceived_share=0.5)
     run = tmp_path / "run"
-    train([masked], config, run, progress=False, perceived_dirs=[masked])
+    train([masked], config, run, progress=False, perceived_dirs=[masked], perception=SHIPPED_PERCEPTION)
     assert (run / "best.safetensors").is_file()
     assert f"{masked} (from perceived starts)" in (run / "data.txt").read_text()
     # a run that starts from those weights begins where they left off: with no step size,

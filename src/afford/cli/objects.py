@@ -12,6 +12,7 @@ def cmd_train_dynamics(args) -> int:
     from afford.objects.calibration import CALIBRATION_FILE
     from afford.objects.dynamics import PRESETS
     from afford.objects.train import train
+    from afford.shipped import OBJECTS, PERCEPTION_FILE
     from afford.training.overrides import apply_overrides, preset_config
 
     config = preset_config(PRESETS, args.preset, steps=args.steps, threads=args.threads)
@@ -26,7 +27,7 @@ def cmd_train_dynamics(args) -> int:
             not args.json,
             args.fraction,
             perceived_dirs=args.perceived_data or (),
-            perception=args.perception,
+            perception=args.perception or str(OBJECTS / PERCEPTION_FILE),
             init=args.init,
         )
     except KeyboardInterrupt:

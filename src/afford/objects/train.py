@@ -62,17 +62,17 @@ def load(data_dirs: list[str | Path], split: str) -> Transitions:
     return t
 
 
-def load_perceived(data_dirs: list[str | Path], perception: str | Path | None, split: str) -> Transitions:
+def load_perceived(data_dirs: list[str | Path], perception: str | Path, split: str | None) -> Transitions:
     """The executions of datasets with images, each started from the objects the perception net
-    (default: the shipped one) finds in its start image, as a planner starts: an object it
+    (a weights file) finds in its start image, as a planner starts: an object it
     misses (a support hidden under a block) is absent, and where it went is not learned. The
     objects it finds keep their true poses: the gate still learns that an object nothing moved
     stays exactly where it was, which a few millimetres of perceived error would blur."""
     from afford.data.format import Dataset
     from afford.objects.perception_measure import perceived_starts
-    from afford.shipped import load_object_perception
+    from afford.objects.perception_train import load_perception
 
-    net = load_object_perception(None) if perception is None else _perception(perception)
+    net = load_perception(perception)
     parts = []
     for d in data_dirs:
         t = read_transitions(d, split)
@@ -88,12 +88,6 @@ def load_perceived(data_dirs: list[str | Path], perception: str | Path | None, s
     return Transitions.concatenate(parts)
 
 
-def _perception(path: str | Path):
-    from afford.objects.perception_train import load_perception
-
-    return load_perception(path)
-
-
 def train(
     data_dirs: list[str | Path],
     config: DynamicsConfig,
@@ -107,7 +101,8 @@ def train(
     """Train into `run_dir` (resuming from its last checkpoint) on the train splits of
     `data_dirs`, validating on the first's val split; `limit`: use only this share of the
     training executions (a learning curve). With `perceived_dirs`, `config.perceived_share` of
-    each batch comes from their executions started from perceived states (`load_perceived`);
+    each batch comes from their executions started from what the `perception` net (a weights
+    file, needed with them) sees (`load_perceived`);
     `init`: a new run starts from these weights (fine-tuning)."""
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
@@ -119,6 +114,8 @@ def train(
     n_true = len(train_set)
     n_perceived = round(config.batch * config.perceived_share) if perceived_dirs else 0
     if n_perceived:
+        if perception is None:
+            raise ValueError("perceived datasets need the perception net that sees them")
         train_set = Transitions.concatenate(
             [train_set, load_perceived(list(perceived_dirs), perception, "train")]
         )

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from afford.errors import UserError
+
 TIPPED_DEG = 10.0  # the block's long axis turned by more than this: it tipped
 SWEEP = np.round(np.arange(-0.12, 0.1201, 0.01), 3)  # place x, metres (the block is 24 cm long)
 TASKS = Path(__file__).resolve().parents[1] / "tasks" / "paper"
@@ -92,6 +94,8 @@ def start_states(scene, task: str) -> dict[str, tuple[np.ndarray, int, np.ndarra
         for kind, position in steps:
             out = simulate(scene, poses[None], np.array([held]), affordance(kind, position)[None])
             poses, held = out.poses[0, 0], int(out.held[0, 0])
+            if (kind == "grasp") != (held >= 0):  # the arm could not carry the plan's step out
+                raise UserError(f"{task}: the oracle's {kind} at {position} did not execute")
         return poses, held, scene.observe()
 
     plan = PLANS[task]
@@ -201,7 +205,10 @@ def run(args) -> None:
     from afford.objects.train import load_dynamics
     from afford.sim.scene import Scene
 
-    nets = {label(w): load_dynamics(w) for w in args.weights}
+    labels = [label(w) for w in args.weights]
+    if len(set(labels)) < len(labels):
+        raise UserError(f"two weights files share a name in the table: {', '.join(labels)}")
+    nets = {name: load_dynamics(w) for name, w in zip(labels, args.weights, strict=True)}
     models = dict(nets)
     if args.ensemble:
         models["judged together"] = DynamicsEnsemble(list(nets.values()))

@@ -54,6 +54,32 @@ def test_members_vote_and_a_moved_object_lands_at_the_movers_median():
     np.testing.assert_allclose(fused.probability, [[0.8, 0.2]], atol=1e-6)
 
 
+def test_outcomes_are_fused_by_rank_and_a_split_vote_is_decided_among_those_that_act():
+    before = np.array([[_pose(0.0), _pose(0.5)]], np.float32)
+    gone = [np.nan] * 7
+
+    def member(likely_x: float, other_x: float, probability: list[float]) -> Outcomes:
+        # outcome 0 moves object 0 to other_x, outcome 1 to likely_x: the likelier is second
+        poses = np.array([[_pose(other_x), _pose(0.5)], [_pose(likely_x), _pose(0.5)]], np.float32)[None]
+        return Outcomes(poses, np.array([[-1, -1]]), np.array([probability], np.float32))
+
+    fused = fuse([member(0.2, 0.3, [0.4, 0.6]), member(0.22, 0.3, [0.3, 0.7])], before)
+    # each member's likelier outcome fused into the first, with its mean probability
+    np.testing.assert_allclose(fused.poses[0, 0, 0, 0], 0.21, atol=1e-6)
+    np.testing.assert_allclose(fused.poses[0, 1, 0, 0], 0.3, atol=1e-6)
+    np.testing.assert_allclose(fused.probability, [[0.65, 0.35]], atol=1e-6)
+    # two members say gone, two moved, one still: something happens, and it moves
+    split = [_member(gone, _pose(0.5), [0.5, 0.5])] * 2 + [_member(_pose(0.2), _pose(0.5), [0.5, 0.5])] * 2
+    fused = fuse([*split, _member(_pose(0.0), _pose(0.5), [0.5, 0.5], held=0)], before)
+    np.testing.assert_allclose(fused.poses[0, 0, 0, :3], [0.2, 0.0, 0.8], atol=1e-6)
+    # an object the fused poses put off the table is not held
+    gone_held = [_member(gone, _pose(0.5), [0.5, 0.5], held=0)] * 2 + [
+        _member(_pose(0.0), _pose(0.5), [0.5, 0.5])
+    ]
+    fused = fuse(gone_held, before)
+    assert np.isnan(fused.poses[0, 0, 0, 0]) and fused.held.tolist() == [[-1, -1]]
+
+
 def test_an_object_most_members_put_off_the_table_is_gone():
     before = np.array([[_pose(0.0), _pose(0.5)]], np.float32)
     gone = [np.nan] * 7

@@ -44,6 +44,14 @@ def test_perceived_starts_keep_true_poses_of_what_is_found(masked):
     np.testing.assert_array_equal(seen.after, truth.after)
 
 
+def test_a_batch_takes_its_share_from_the_perceived_executions():
+    from afford.objects.train import batch_rows
+
+    rows = batch_rows(np.random.default_rng(0), 100, 140, 64, 16)
+    assert len(rows) == 64 and (rows[:48] < 100).all() and ((rows[48:] >= 100) & (rows[48:] < 140)).all()
+    assert (batch_rows(np.random.default_rng(0), 100, 100, 64, 0) < 100).all()
+
+
 def test_training_draws_a_share_of_each_batch_from_perceived_starts(masked, tmp_path):
     config = dataclasses.replace(TINY, perceived_share=0.5)
     run = tmp_path / "run"

@@ -37,13 +37,13 @@ def test_a_two_step_plan_is_found_and_its_states_are_drawn(scene):
 
 def test_the_true_start_is_the_simulators_objects_and_plans_the_task(scene):
     from afford.data.draws import pose_array
-    from afford.planning.objects_model import TrueStartModel
+    from afford.planning.objects_model import TrueStart
 
     task = load_task(TASK)
     scene.reset(task.scene)
     poses, mask = pose_array(scene), scene.instance_mask()
     nets = (load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer())
-    model = TrueStartModel(scene.observe(), *nets, poses=poses, held=-1, mask=mask)
+    model = ObjectsModel(scene.observe(), *nets, start=TrueStart(poses, -1, mask))
     _, state = model.root()
     np.testing.assert_array_equal(state.poses, poses)
     assert state.held == -1 and model.seen.shape[0] == len(poses)

@@ -50,7 +50,7 @@ def load_object_dynamics(weights: str | Path | None = None, fallback: bool = Fal
     from afford.objects.train import load_dynamics
 
     path = _object_net(weights, DYNAMICS_FILE, fallback)
-    members = sorted((path.parent / OBJECT_MEMBERS_DIR).glob("*.safetensors"))
+    members = sorted((Path(weights or OBJECTS) / OBJECT_MEMBERS_DIR).glob("*.safetensors"))
     if not members:
         return load_dynamics(path)
     return DynamicsEnsemble([load_dynamics(p) for p in (path, *members)])

@@ -327,7 +327,7 @@ def add_parsers(sub) -> None:
         const="shipped",
         metavar="DIR",
         help="evaluate the object world model (perception.safetensors and dynamics.safetensors in DIR, "
-        "a net DIR lacks the shipped one, and dynamics members in DIR/ensemble/ judged together; "
+        "a net missing from DIR: the shipped one; dynamics members in DIR/ensemble/ judged together; "
         "without DIR the shipped ones) instead of a prediction net, on the same measures",
     )
     f = esub.add_parser(

@@ -8,12 +8,14 @@ what they agree on and cancels part of what each gets wrong on its own:
 
 - each member's outcomes are ranked likeliest first, and the r-th outcome of every member is
   fused into the ensemble's r-th outcome, with the members' mean probability;
-- per object, the members vote: gone (off the table) if most say so, else moved if most moved
-  it (an object a member calls still is its start row exactly, `state.moved`), else copied
-  exactly as eq. (2) on objects copies a still object;
+- per object, the members vote: if most say something happens to it (it leaves the table or
+  moves; an object a member calls still is its start row exactly, `state.moved`), it is gone
+  where more of those say gone than moved, else moved; otherwise it is copied exactly, as
+  eq. (2) on objects copies a still object;
 - a moved object lands at the median of the movers' positions (a median, since one member's
   stray landing should not drag the others'), with the axes of the mover nearest that point;
-- the held slot is the members' most common answer.
+- the held slot is the members' most common answer, none where the fused poses put that
+  object off the table.
 
 `DynamicsEnsemble.outcomes` answers what `ObjectDynamics.outcomes` does, so every part of the
 object world model (planning, rollouts, `afford eval dynamics`) takes either.
@@ -72,8 +74,9 @@ def fuse(members: Sequence[Outcomes], before: np.ndarray) -> Outcomes:
     start = np.broadcast_to(before[None, :, None], poses.shape)
     gone = np.isnan(poses[..., 0])
     movers = moved(start, poses) & ~gone
-    gone_vote = 2 * gone.sum(0) > m
-    move_vote = (2 * movers.sum(0) > m) & ~gone_vote
+    happens = 2 * (gone | movers).sum(0) > m
+    gone_vote = happens & (gone.sum(0) > movers.sum(0))
+    move_vote = happens & ~gone_vote
     position = np.where(movers[..., None], poses[..., :3], np.nan)
     with warnings.catch_warnings():  # an object no member moved has an all-NaN median
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -85,8 +88,10 @@ def fuse(members: Sequence[Outcomes], before: np.ndarray) -> Outcomes:
     fused[..., :3] = np.where(move_vote[..., None], centre, fused[..., :3])
     fused[..., 3:7] = np.where(move_vote[..., None], axes, fused[..., 3:7])
     fused[gone_vote] = np.nan
-    held = np.stack([o.held for o in ranked])  # (M, N, K)
-    return Outcomes(fused, _most_common(held), np.mean([o.probability for o in ranked], axis=0))
+    held = _most_common(np.stack([o.held for o in ranked]))  # (N, K)
+    slot_gone = np.take_along_axis(gone_vote, np.maximum(held, 0)[..., None], axis=-1)[..., 0]
+    held = np.where(slot_gone, -1, held)
+    return Outcomes(fused, held, np.mean([o.probability for o in ranked], axis=0))
 
 
 def _most_common(values: np.ndarray) -> np.ndarray:

@@ -54,6 +54,13 @@ def batch_of(t: Transitions, rows: np.ndarray, config: DynamicsConfig, rng: np.r
     return inputs, targets
 
 
+def batch_rows(rng: np.random.Generator, n_true: int, n_all: int, batch: int, n_perceived: int) -> np.ndarray:
+    """A batch's rows of a training set whose first `n_true` executions start from true states
+    and the rest from perceived ones: `n_perceived` of them from the rest, drawn at random."""
+    rows = rng.integers(0, n_true, batch - n_perceived)
+    return np.concatenate([rows, rng.integers(n_true, n_all, n_perceived)]) if n_perceived else rows
+
+
 def load(data_dirs: list[str | Path], split: str) -> Transitions:
     parts = [read_transitions(d, split) for d in data_dirs]
     t = Transitions.concatenate(parts)
@@ -67,7 +74,10 @@ def load_perceived(data_dirs: list[str | Path], perception: str | Path, split: s
     (a weights file) finds in its start image, as a planner starts: an object it
     misses (a support hidden under a block) is absent, and where it went is not learned. The
     objects it finds keep their true poses: the gate still learns that an object nothing moved
-    stays exactly where it was, which a few millimetres of perceived error would blur."""
+    stays exactly where it was, which a few millimetres of perceived error would blur. Found
+    means matched to a true object within `perception_measure.MATCH_PX` of its centre, whatever
+    kind perception gave it; what perception sees that is not there is dropped. Validation,
+    the best checkpoint and the calibration stay on true starts."""
     from afford.data.format import Dataset
     from afford.objects.perception_measure import perceived_starts
     from afford.objects.perception_train import load_perception
@@ -112,13 +122,17 @@ def train(
         keep = np.random.default_rng(0).permutation(len(train_set))[: max(1, int(limit * len(train_set)))]
         train_set = train_set.subset(np.sort(keep))
     n_true = len(train_set)
-    n_perceived = round(config.batch * config.perceived_share) if perceived_dirs else 0
-    if n_perceived:
+    n_perceived = 0
+    if perceived_dirs:
+        if not 0 < config.perceived_share < 1:
+            raise DataError(f"perceived_share must be in (0, 1), not {config.perceived_share}")
         if perception is None:
-            raise ValueError("perceived datasets need the perception net that sees them")
-        train_set = Transitions.concatenate(
-            [train_set, load_perceived(list(perceived_dirs), perception, "train")]
-        )
+            raise DataError("perceived datasets need the perception net that sees them")
+        seen = load_perceived(list(perceived_dirs), perception, "train")
+        if len(seen) == 0:
+            raise DataError(f"{', '.join(map(str, perceived_dirs))}: no executions in the train split")
+        train_set = Transitions.concatenate([train_set, seen])
+        n_perceived = max(1, round(config.batch * config.perceived_share))
     val_set = load(data_dirs[:1], "val")
     val_rows = np.linspace(0, len(val_set) - 1, min(VAL_EXECUTIONS, len(val_set))).astype(int)
     val_batch = batch_of(val_set, val_rows, config, None)
@@ -128,9 +142,7 @@ def train(
     class Batches:
         def __iter__(self):
             for _ in range(max(1, n_true // config.batch)):
-                rows = rng.integers(0, n_true, config.batch - n_perceived)
-                if n_perceived:
-                    rows = np.concatenate([rows, rng.integers(n_true, len(train_set), n_perceived)])
+                rows = batch_rows(rng, n_true, len(train_set), config.batch, n_perceived)
                 yield batch_of(train_set, rows, config, rng)
 
     def train_step(batch):

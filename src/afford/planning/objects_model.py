@@ -52,6 +52,17 @@ class ObjectsState:
     as_seen: np.ndarray
 
 
+@dataclass
+class TrueStart:
+    """The simulator's objects in the start image, to start from instead of the perceived ones
+    (`--planner objects-true`, a diagnostic: beside `objects`, what perception costs a plan):
+    pose rows per slot, the held slot (-1: none), the image's instance mask (slot per pixel)."""
+
+    poses: np.ndarray
+    held: int
+    mask: np.ndarray
+
+
 class ObjectsModel(WorldModel):
     def __init__(
         self,
@@ -60,17 +71,23 @@ class ObjectsModel(WorldModel):
         perception: PerceptionNet,
         dynamics: Dynamics,
         drawer: Drawer | None = None,
+        start: TrueStart | None = None,
     ):
         self.image = np.asarray(image, dtype=np.float32)
         self.recognizer = recognizer
         self.perception = perception
         self.dynamics = dynamics
         self.drawer = drawer if drawer is not None else Drawer()
+        self.start = start
 
     def root(self):
-        objects = perceive(self.perception, self.image[None])[0]
-        poses, held = to_state(objects)
-        self.seen = slot_masks(objects)
+        if self.start is None:
+            objects = perceive(self.perception, self.image[None])[0]
+            poses, held = to_state(objects)
+            self.seen = slot_masks(objects)
+        else:
+            poses, held = np.asarray(self.start.poses, np.float32), int(self.start.held)
+            self.seen = np.stack([self.start.mask == slot for slot in range(len(poses))])
         return self.image, ObjectsState(poses, held, self.drawer.render(poses, held), self.seen.any((1, 2)))
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
@@ -93,23 +110,6 @@ class ObjectsModel(WorldModel):
         seen = self.seen[go & state.as_seen].any(0)
         child = self.drawer.draw(image, state.drawn, drawn, seen)
         return child, ObjectsState(poses, held, drawn, state.as_seen & ~go)
-
-
-class TrueStartModel(ObjectsModel):
-    """The object world model started from the simulator's true objects (their poses, the held
-    slot and the instance mask of the start image) instead of the perceived ones: a diagnostic
-    (`--planner objects-true`) that, beside `objects`, tells what perception costs a plan."""
-
-    def __init__(self, *model, poses: np.ndarray, held: int, mask: np.ndarray):
-        """`model`: `ObjectsModel`'s arguments; the true start: pose rows per slot, the held
-        slot (-1: none) and the start image's instance mask (slot per pixel, -1: none)."""
-        super().__init__(*model)
-        self.true = (np.asarray(poses, np.float32), int(held), np.asarray(mask))
-
-    def root(self):
-        poses, held, mask = self.true
-        self.seen = np.stack([mask == slot for slot in range(len(poses))])
-        return self.image, ObjectsState(poses, held, self.drawer.render(poses, held), self.seen.any((1, 2)))
 
 
 @dataclass
@@ -136,8 +136,9 @@ class ObjectsBranchingModel(ObjectsModel):
         dynamics: Dynamics,
         drawer: Drawer | None = None,
         risk: float = 0.0,
+        start: TrueStart | None = None,
     ):
-        super().__init__(image, recognizer, perception, dynamics, drawer)
+        super().__init__(image, recognizer, perception, dynamics, drawer, start)
         self.risk = risk
 
     def root(self):

@@ -145,9 +145,9 @@ def _object_nets(folder: str | None) -> tuple:
     return load_object_perception(folder, fallback=True), load_object_dynamics(folder, fallback=True)
 
 
-def _objects_model(image: np.ndarray, config: PlannerConfig, learned) -> ObjectsModel:
+def _objects_model(image: np.ndarray, config: PlannerConfig, learned, start=None) -> ObjectsModel:
     """The object world model on `image`: its likeliest outcome carried on, or every outcome a
-    branch (PlannerConfig.outcomes)."""
+    branch (PlannerConfig.outcomes); from the perceived objects, or from `start` (TrueStart)."""
     from afford.objects.draw import Drawer
     from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
 
@@ -156,13 +156,16 @@ def _objects_model(image: np.ndarray, config: PlannerConfig, learned) -> Objects
     perception, dynamics = _object_nets(config.objects_weights)
     parts = (image, _nets(learned).recognizer, perception, dynamics, _DRAWER[0])
     if config.outcomes == "expected":
-        return ObjectsBranchingModel(*parts, risk=config.risk)
-    return ObjectsModel(*parts)
+        return ObjectsBranchingModel(*parts, risk=config.risk, start=start)
+    return ObjectsModel(*parts, start=start)
 
 
-def _objects_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
-    """The paper's search with the object world model: objects perceived, moved and drawn."""
-    model = _objects_model(scene.observe(), config, learned)
+def _objects_search(
+    task: Task, scene: Scene, config: PlannerConfig, learned, steps: int, start=None
+) -> SearchResult:
+    """The paper's search with the object world model: objects perceived (or `start`), moved
+    and drawn."""
+    model = _objects_model(scene.observe(), config, learned, start)
     result = search(model, task.goal, steps, config.search)
     if config.optimise_turns:  # the angle is the dynamics' input: searched, not descended
         from afford.planning.angles import with_searched_turns
@@ -179,19 +182,14 @@ def _objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcom
 def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
     """The object world model's search started from the true objects, not the perceived ones."""
     from afford.data.draws import pose_array
-    from afford.objects.draw import Drawer
-    from afford.planning.objects_model import TrueStartModel
+    from afford.planning.objects_model import TrueStart
 
     scene.reset(task.scene)
-    if not _DRAWER:
-        _DRAWER.append(Drawer())
-    perception, dynamics = _object_nets(config.objects_weights)
     held = [name for name, _ in scene.slots].index(scene.held) if scene.held else -1
-    nets = (_nets(learned).recognizer, perception, dynamics, _DRAWER[0])
-    model = TrueStartModel(
-        scene.observe(), *nets, poses=pose_array(scene), held=held, mask=scene.instance_mask()
+    start = TrueStart(pose_array(scene), held, scene.instance_mask())
+    return _judge(
+        task, "objects-true", _objects_search(task, scene, config, learned, task.max_steps, start), scene
     )
-    return _judge(task, "objects-true", search(model, task.goal, task.max_steps, config.search), scene)
 
 
 def _perceived_sim(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
@@ -431,4 +429,4 @@ CLOSED_LOOP = {
     "hybrid-objects": _hybrid_rounds("hybrid-objects"),
 }
 # The planners that load the trained nets.
-USES_NETS = ("learned", "hybrid", "ensemble", "objects", "hybrid-objects")
+USES_NETS = ("learned", "hybrid", "ensemble", "objects", "hybrid-objects", "objects-true")

@@ -99,3 +99,29 @@ def test_the_true_next_state_draws_the_recorded_image(drawer, small_dataset):
         nxt = drawer.render(seq.poses[t + 1], int(seq.held[t + 1]))
         drawn = drawer.draw(seq.image(t), now, nxt)
         assert np.abs(drawn - seq.image(t + 1)).max() < 2e-3  # the stored images are quantised
+
+
+def test_an_object_sunk_into_what_it_landed_on_is_lifted_to_rest_on_it(drawer, scene):
+    from scenarios import BLOCK_TOP_ON_SUPPORT
+
+    scene.reset(
+        [
+            ObjectSpec.upright("support", 0.0, 0.30),
+            ObjectSpec.upright("block", 0.0, 0.30, 0.0, z=SUPPORT_TOP),
+            ObjectSpec.upright("cup", -0.08, 0.30, z=BLOCK_TOP_ON_SUPPORT),
+            ObjectSpec.upright("ball", 0.12, 0.20),
+        ]
+    )
+    poses, held = state_of(scene)
+    slots = [name for name, _ in scene.slots]
+    cup, ball, block = slots.index("cup0"), slots.index("ball0"), slots.index("block0")
+    sunk = poses.copy()
+    sunk[cup, 2] -= 0.006  # 6 mm into the block, as a dynamics' landing a little low
+    sunk[ball, 2] -= 0.004  # sunk into the table, but not moved: left as it is
+    moved = np.zeros(len(poses), bool)
+    moved[cup] = True
+    rested = drawer.rest(sunk, held, moved)
+    assert rested[cup, 2] == pytest.approx(poses[cup, 2], abs=1e-3)
+    np.testing.assert_array_equal(rested[ball], sunk[ball])
+    np.testing.assert_array_equal(rested[block], sunk[block])
+    np.testing.assert_array_equal(drawer.rest(poses, held, moved), poses)  # resting: nothing to lift

@@ -24,6 +24,12 @@ from afford.sim.scene import ObjectSpec, Scene
 
 CHANGED = 1e-6  # a pixel whose drawings differ by more than this in any channel changed
 WIDEN_PX = 2  # eq. (3)'s mask grown by this many pixels
+# Resting: an object sunk deeper than this into what is under it is lifted out of it. The
+# dynamics put a placed cup's centre a few millimetres off; sunk into the block it lands on, the
+# block's top hides the cup's floor and the drawing shows the block through the cup.
+SUNK_M = 0.0005
+UPWARD = 0.7  # a contact whose normal is this close to vertical is one object resting on another
+REST_ROUNDS = 3  # a stack is lifted from the bottom up, one object a round
 
 
 class Drawer:
@@ -34,7 +40,37 @@ class Drawer:
 
     def render(self, poses: np.ndarray, held: int) -> np.ndarray:
         """(H, W, 4) RGBD of a state: pose rows per slot (NaN: none), the held slot or -1."""
-        specs, names, counts = [], {}, dict.fromkeys(KINDS, 0)
+        self._pose(poses, held)
+        return self.scene.observe()
+
+    def rest(self, poses: np.ndarray, held: int, moved: np.ndarray) -> np.ndarray:
+        """The pose rows with each moved object (`moved`, (slots,) bool) that sinks into what is
+        under it lifted straight up until it rests on it; the held object stays in the gripper.
+        Rigid objects do not pass into one another, and a drawing of one that does shows the
+        wrong surface; the shapes are the simulator's, as in `render`."""
+        out = np.array(poses, dtype=np.float32, copy=True)
+        s = self.scene
+        for _ in range(REST_ROUNDS):
+            slot_of = {s.body_id(name): slot for slot, name in self._pose(out, held).items()}
+            lift = np.zeros(N_SLOTS)
+            for c in s.data.contact[: s.data.ncon]:
+                if c.dist > -SUNK_M or abs(c.frame[2]) < UPWARD:
+                    continue
+                # The normal points from geom1 to geom2: the upper geom is the one it points to.
+                upper = c.geom2 if c.frame[2] > 0 else c.geom1
+                slot = slot_of.get(int(s.model.geom_bodyid[upper]))
+                if slot is not None and moved[slot] and slot != held:
+                    lift[slot] = max(lift[slot], -c.dist / abs(c.frame[2]))
+            if not lift.any():
+                break
+            out[:, 2] += lift.astype(np.float32)
+        return out
+
+    def _pose(self, poses: np.ndarray, held: int) -> dict[int, str]:
+        """Put the state into the drawing scene, contacts computed; {slot: scene name}."""
+        import mujoco
+
+        specs, kinds, names, counts = [], {}, {}, dict.fromkeys(KINDS, 0)
         for slot in range(N_SLOTS):
             if np.isnan(poses[slot, 0]):
                 continue
@@ -43,18 +79,16 @@ class Drawer:
             specs.append(
                 ObjectSpec(kind, tuple(float(v) for v in poses[slot, :3]), tuple(q / np.linalg.norm(q)))
             )
-            names[slot] = kind
+            kinds[slot], names[slot] = kind, f"{kind}{counts[kind]}"  # as the scene names them
             counts[kind] += 1
         s = self.scene
         s.reset(specs, settle=False, check=False)
         # A held slot of a kind the gripper cannot hold (the dynamics may say so of a support)
         # is drawn as the arm at rest, open: what the gripper can show.
-        if held >= 0 and names.get(held) in GRIP_HALF_WIDTH:
-            s.set_arm(s.home_q, finger_fraction(names[held]))
-            import mujoco
-
+        if held >= 0 and kinds.get(held) in GRIP_HALF_WIDTH:
+            s.set_arm(s.home_q, finger_fraction(kinds[held]))
             mujoco.mj_forward(s.model, s.data)
-        return s.observe()
+        return names
 
     def draw(
         self,

@@ -43,6 +43,7 @@ class ObjectRollout:
             before = poses
             poses, held = self.dynamics.outcomes(poses, held, rows[:, t]).likeliest()
             go = moved(before, poses)
+            poses = np.stack([self.drawer.rest(poses[k], int(held[k]), go[k]) for k in range(b)])
             for k in range(b):
                 after = self.drawer.render(poses[k], int(held[k]))
                 image[k] = self.drawer.draw(image[k], drawn[k], after, masks[k][go[k] & as_seen[k]].any(0))

@@ -104,9 +104,11 @@ class ObjectsModel(WorldModel):
         ]
 
     def _child(self, image: np.ndarray, state: ObjectsState, poses: np.ndarray, held: int):
-        """(image, state) of the objects moved to `poses`, drawn over `image` (eq. 3)."""
-        drawn = self.drawer.render(poses, held)
+        """(image, state) of the objects moved to `poses`, drawn over `image` (eq. 3); a moved
+        object sunk into what it landed on rests on it first (`Drawer.rest`)."""
         go = moved(state.poses, poses)
+        poses = self.drawer.rest(poses, held, go)
+        drawn = self.drawer.render(poses, held)
         seen = self.seen[go & state.as_seen].any(0)
         child = self.drawer.draw(image, state.drawn, drawn, seen)
         return child, ObjectsState(poses, held, drawn, state.as_seen & ~go)

@@ -28,6 +28,9 @@ WIDEN_PX = 2  # eq. (3)'s mask grown by this many pixels
 # dynamics put a placed cup's centre a few millimetres off; sunk into the block it lands on, the
 # block's top hides the cup's floor and the drawing shows the block through the cup.
 SUNK_M = 0.0005
+# ... and no deeper than this: a landing a little low, not two objects the dynamics put into one
+# another (a block turned through a cup), which lifting one of them would not make right.
+DEEPEST_M = 0.012
 UPWARD = 0.7  # a contact whose normal is this close to vertical is one object resting on another
 REST_ROUNDS = 3  # a stack is lifted from the bottom up, one object a round
 
@@ -54,7 +57,7 @@ class Drawer:
             slot_of = {s.body_id(name): slot for slot, name in self._pose(out, held).items()}
             lift = np.zeros(N_SLOTS)
             for c in s.data.contact[: s.data.ncon]:
-                if c.dist > -SUNK_M or abs(c.frame[2]) < UPWARD:
+                if not -DEEPEST_M <= c.dist < -SUNK_M or abs(c.frame[2]) < UPWARD:
                     continue
                 # The normal points from geom1 to geom2: the upper geom is the one it points to.
                 upper = c.geom2 if c.frame[2] > 0 else c.geom1

@@ -33,6 +33,16 @@ SMALL_SEQUENCES, SMALL_SHARD = 6, 2
 
 
 @pytest.fixture(scope="session")
+def pose_dataset(tmp_path_factory) -> Path:
+    """A pose-only dataset of 8 sequences (seed 3, shards of 4): what the object dynamics learn from."""
+    from afford.data.generate import GenerateConfig, generate
+
+    root = tmp_path_factory.mktemp("poses") / "p"
+    generate(root, GenerateConfig(sequences=8, seed=3, workers=1, shard_size=4, images=False), progress=False)
+    return root
+
+
+@pytest.fixture(scope="session")
 def small_dataset(tmp_path_factory) -> Path:
     """A real generated dataset of 6 sequences (seed 3, 1 worker, shards of 2), made once."""
     from afford.data.generate import GenerateConfig, generate

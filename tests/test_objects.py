@@ -33,13 +33,6 @@ from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
 TINY = dataclasses.replace(PRESETS["tiny"], threads=1)
 
 
-@pytest.fixture(scope="module")
-def pose_dataset(tmp_path_factory):
-    root = tmp_path_factory.mktemp("poses") / "p"
-    generate(root, GenerateConfig(sequences=8, seed=3, workers=1, shard_size=4, images=False), progress=False)
-    return root
-
-
 def test_pose_generator_gives_the_rendering_generators_states(scene):
     for i in range(2):
         with_images, _ = make_sequence(scene, 5, i, 4, images=True)

@@ -7,10 +7,8 @@ import dataclasses
 import json
 
 import numpy as np
-import pytest
 import torch
 
-from afford.data.generate import GenerateConfig, generate
 from afford.objects.dynamics import PRESETS, ObjectDynamics, Outcomes, predict
 from afford.objects.ensemble import DynamicsEnsemble, fuse
 from afford.objects.state import axes_quat
@@ -89,20 +87,13 @@ def test_an_object_most_members_put_off_the_table_is_gone():
     assert np.isnan(fused.poses[0, :, 0]).all() and not np.isnan(fused.poses[0, :, 1]).any()
 
 
-@pytest.fixture(scope="module")
-def poses(tmp_path_factory):
-    root = tmp_path_factory.mktemp("poses") / "p"
-    generate(root, GenerateConfig(sequences=4, seed=5, workers=1, shard_size=4, images=False), progress=False)
-    return root
-
-
 def _net(seed: int) -> ObjectDynamics:
     torch.manual_seed(seed)
     return ObjectDynamics(TINY)
 
 
-def test_an_ensemble_of_one_net_is_that_net(poses):
-    t = read_transitions(poses)
+def test_an_ensemble_of_one_net_is_that_net(pose_dataset):
+    t = read_transitions(pose_dataset)
     net = _net(0)
     alone = predict(net, t.before, t.held_before, t.actions)
     ranked_first = alone.likeliest()[0]
@@ -111,7 +102,9 @@ def test_an_ensemble_of_one_net_is_that_net(poses):
     np.testing.assert_allclose(np.sort(judged.probability, 1), np.sort(alone.probability, 1), atol=1e-6)
 
 
-def test_a_weights_folder_with_members_loads_an_ensemble_and_eval_takes_several(poses, tmp_path, capsys):
+def test_a_weights_folder_with_members_loads_an_ensemble_and_eval_takes_several(
+    pose_dataset, tmp_path, capsys
+):
     from afford.cli.main import main
     from afford.shipped import DYNAMICS_FILE, OBJECT_MEMBERS_DIR, load_object_dynamics
 
@@ -124,7 +117,7 @@ def test_a_weights_folder_with_members_loads_an_ensemble_and_eval_takes_several(
         )
     ensemble = load_object_dynamics(tmp_path)
     assert isinstance(ensemble, DynamicsEnsemble) and len(ensemble) == 3
-    t = read_transitions(poses)
+    t = read_transitions(pose_dataset)
     o = ensemble.outcomes(t.before, t.held_before, t.actions)
     assert o.poses.shape == (len(t), TINY.outcomes, *t.before.shape[1:])
     np.testing.assert_allclose(o.probability.sum(1), 1.0, atol=1e-5)
@@ -132,6 +125,6 @@ def test_a_weights_folder_with_members_loads_an_ensemble_and_eval_takes_several(
         str(tmp_path / DYNAMICS_FILE),
         *(str(p) for p in sorted((tmp_path / OBJECT_MEMBERS_DIR).iterdir())),
     ]
-    args = ["eval", "dynamics", "--weights", *files, "--data", str(poses), "--split", "all", "--json"]
+    args = ["eval", "dynamics", "--weights", *files, "--data", str(pose_dataset), "--split", "all", "--json"]
     assert main(args) == 0
     assert json.loads(capsys.readouterr().out)["model"] == " + ".join(files)

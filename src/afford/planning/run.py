@@ -184,9 +184,8 @@ def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> O
     from afford.data.draws import pose_array
     from afford.planning.objects_model import TrueStart
 
-    scene.reset(task.scene)
-    held = [name for name, _ in scene.slots].index(scene.held) if scene.held else -1
-    start = TrueStart(pose_array(scene), held, scene.instance_mask())
+    scene.reset(task.scene)  # a task starts with the gripper empty
+    start = TrueStart(pose_array(scene), -1, scene.instance_mask())
     return _judge(
         task, "objects-true", _objects_search(task, scene, config, learned, task.max_steps, start), scene
     )

@@ -67,3 +67,29 @@ def test_training_draws_a_share_of_each_batch_from_perceived_starts(masked, tmp_
     then, _ = read_checkpoint(again / "last.safetensors", "dynamics")
     weights = [k for k in first if k.startswith("model.")]
     assert weights and all(torch.equal(first[k], then[k]) for k in weights)
+
+
+def test_perception_training_goes_on_from_another_runs_weights(masked, tmp_path):
+    from afford.objects.perception import PRESETS as SEEING
+    from afford.objects.perception_train import train as train_perception
+
+    tiny = dataclasses.replace(SEEING["tiny"], steps=2, eval_every=2, threads=1)
+    first_run, again = tmp_path / "first", tmp_path / "again"
+    train_perception(masked, tiny, first_run, progress=False)
+    # with no step size, a run started from those weights ends with them (batch statistics
+    # aside, which every training batch moves)
+    train_perception(
+        masked,
+        dataclasses.replace(tiny, steps=1, lr=0.0),
+        again,
+        progress=False,
+        init=first_run / "last.safetensors",
+    )
+    first, _ = read_checkpoint(first_run / "last.safetensors", "perception")
+    then, _ = read_checkpoint(again / "last.safetensors", "perception")
+    weights = [k for k in first if k.startswith("model.") and "running" not in k and "batches" not in k]
+    assert weights and all(torch.equal(first[k], then[k]) for k in weights)
+    fresh = tmp_path / "fresh"
+    train_perception(masked, dataclasses.replace(tiny, steps=1, lr=0.0), fresh, progress=False)
+    other, _ = read_checkpoint(fresh / "last.safetensors", "perception")
+    assert not all(torch.equal(first[k], other[k]) for k in weights)

@@ -150,7 +150,7 @@ def cmd_train_perception(args) -> int:
         preset_config(PRESETS, args.preset, steps=args.steps, threads=args.threads), args.set
     )
     try:
-        state = train(args.data, config, args.out, not args.json)
+        state = train(args.data, config, args.out, not args.json, init=args.init)
     except KeyboardInterrupt:
         print(f"interrupted; the last checkpoint is in {args.out}: run the same command again to continue")
         return 130
@@ -266,6 +266,9 @@ def add_train_parser(tsub) -> None:
     )
     q.add_argument("--data", required=True, metavar="DIR", help="a dataset with instance masks")
     q.add_argument("--out", required=True, metavar="RUN")
+    q.add_argument(
+        "--init", metavar="FILE", help="a new run starts from these perception weights (training on)"
+    )
     q.add_argument("--preset", choices=tuple(SEEING), default="cpu")
     q.add_argument("--steps", type=int, help="override the preset's number of batches")
     q.add_argument("--threads", type=int, help="torch threads (default: the preset's)")

@@ -37,9 +37,14 @@ def batch_of(data: Dataset, items: list[tuple[int, int]], config: PerceptionConf
 
 
 def train(
-    data_dir: str | Path, config: PerceptionConfig, run_dir: str | Path, progress: bool = True
+    data_dir: str | Path,
+    config: PerceptionConfig,
+    run_dir: str | Path,
+    progress: bool = True,
+    init: str | Path | None = None,
 ) -> LoopState:
-    """Train into `run_dir`, resuming from its last checkpoint."""
+    """Train into `run_dir`, resuming from its last checkpoint; a new run starts from `init`'s
+    weights when given (a perception checkpoint: training on from where another run ended)."""
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
     rng = np.random.default_rng(config.seed)
@@ -76,6 +81,7 @@ def train(
         train_step=train_step,
         validate=validate,
         lr_at=warmup_cosine(config.warmup, config.steps),
+        init=init,
     )
     return run(loop, run_dir, progress)
 

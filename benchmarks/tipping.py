@@ -2,6 +2,7 @@
 
     python benchmarks/tipping.py --weights src/afford/weights/objects/dynamics.safetensors \
         [--weights runs/dyn-seed1/best.safetensors ...] [--ensemble] [--start true|perceived|both] \
+        [--perception FILE] \
         [--out docs/objects-tipping.png] [--json]
 
 The paper's counterweight tasks (04, 05) turn on whether a place near the end of a block that
@@ -183,6 +184,11 @@ def main() -> int:
         help="the nets' start states: the true ones, the objects the shipped perception net sees in "
         "each state's image (as in planning), or both (default)",
     )
+    parser.add_argument(
+        "--perception",
+        metavar="FILE",
+        help="the perception net of the perceived starts (default: the shipped one)",
+    )
     parser.add_argument("--out", metavar="FILE.png", help="draw the sweeps here")
     parser.add_argument("--json", action="store_true", help="the figures as JSON")
     args = parser.parse_args()
@@ -213,9 +219,11 @@ def run(args) -> None:
     if args.ensemble:
         models["judged together"] = DynamicsEnsemble(list(nets.values()))
     scene = Scene()
+    from afford.objects.perception_train import load_perception
     from afford.shipped import load_object_perception
 
-    starts = {"true": [None], "perceived": [load_object_perception()]}
+    seeing = load_perception(args.perception) if args.perception else load_object_perception()
+    starts = {"true": [None], "perceived": [seeing]}
     starts["both"] = starts["true"] + starts["perceived"]
     sweeps = [
         s for seen_by in starts[args.start] for task in PLANS for s in sweep(scene, task, models, seen_by)

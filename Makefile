@@ -59,7 +59,7 @@ bench: install
 	$(VENV)/bin/afford bench random --n 100 --seed 0 --max-steps 3 --planner all
 
 # Every shipped net made again from its recipe (afford/recipes/): the data, the training runs, the
-# calibrations and the exports, into runs/made-weights/. About 12 hours on 2 cores; each stage
+# calibrations and the exports, into runs/made-weights/. About 14 hours on 2 cores; each stage
 # leaves a stamp in runs/stamps/, so running it again skips what is done and resumes the rest.
 weights: install
 	$(VENV)/bin/afford weights make

@@ -162,7 +162,7 @@ def add_parsers(sub) -> None:
         help="the shipped weights' recipes; make them again",
         description="Every shipped weights file carries its recipe in its metadata: the data commands "
         "and seeds, the training commands, the calibration and export, the commit that shipped it and "
-        "the training time on 2 cores (afford/recipes.py holds them all).",
+        "the training time on 2 cores (the afford.recipes package holds them all).",
     )
     wsub = w.add_subparsers(dest="weights", required=True)
     i = wsub.add_parser(

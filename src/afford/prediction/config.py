@@ -196,7 +196,7 @@ _CPU = PredictionConfig(
 
 PRESETS = {
     "cpu": _CPU,
-    # The shipped prediction net's recipe (afford/recipes.py; with --more-data data/effects): two
+    # The shipped prediction net's recipe (afford/recipes/; with --more-data data/effects): two
     # outcomes forked in the latent, the second drawing side effects, half the runs holding one,
     # and the gradient clipped, which a two-outcome run from scratch needs.
     "cpu-two-outcome": replace(

@@ -47,6 +47,7 @@ _PREDICT_FIRST = (
     "the command named no --prediction, so the states came from the prediction net shipped then: "
     "the one-outcome net of runs/prediction"
 )
+_TIMED = "timed with the shipped file as the run's best checkpoint (the same net, so the same work)"
 _EXPORTED = "first written by `afford export` (the same float16 weights and calibrated config)"
 
 # Every stage, in the order `afford weights make` runs them: each after the stages it reads.
@@ -63,10 +64,10 @@ STAGES: tuple[Stage, ...] = (
         "data-part",
         "data",
         "afford generate --out data/part --sequences 5200 --seed 0 --splits-of 10000",
-        None,
+        6.8,
         "the first 5,200 sequences of data/cpu with its val and test splits (4,824 training "
         "sequences); first made as a view of data/cpu's first 208 shards with a manifest written by "
-        "hand, so its generation time was never recorded",
+        "hand; the minutes are this command's",
     ),
     _stage(
         "data-effects",
@@ -111,8 +112,9 @@ STAGES: tuple[Stage, ...] = (
         "data",
         "afford data predict data/part --split train --sequences 1500 --out data/predicted/words-train.npz "
         "--prediction runs/prediction/best.safetensors",
-        None,
-        _PREDICT_FIRST,
+        0.56,
+        f"{_PREDICT_FIRST}; timed with a one-outcome net of the same preset trained one batch "
+        "(the same work)",
     ),
     _stage(
         "train-recognition-10k",
@@ -134,16 +136,16 @@ STAGES: tuple[Stage, ...] = (
         "calibrate-recognition",
         "calibrate",
         "afford eval recognition --run runs/rec-10k-ft --data data/cpu",
-        None,
+        0.38,
         "the cut-off picked on val (0.50: the best recall within 0.15 spurious detections per image), "
-        "in RUN/threshold.json",
+        f"in RUN/threshold.json; {_TIMED}",
     ),
     _stage(
         "export-recognition",
         "export",
         f"afford weights export recognition.safetensors --run runs/rec-10k-ft --out {MADE}",
-        None,
-        "float32 with its cut-off; first written by `afford export`",
+        0.04,
+        f"float32 with its cut-off; first written by `afford export`; {_TIMED}",
     ),
     _stage(
         "train-prediction",
@@ -159,16 +161,16 @@ STAGES: tuple[Stage, ...] = (
         "calibrate-prediction",
         "calibrate",
         "afford eval prediction --run runs/scratch-clip --data data/part --no-futures",
-        None,
+        0.69,
         "the choice head's Platt scaling fitted on val, one for all action types and one per type, "
-        "in RUN/calibration.json",
+        f"in RUN/calibration.json; {_TIMED}",
     ),
     _stage(
         "export-prediction",
         "export",
         f"afford weights export prediction.safetensors --run runs/scratch-clip --out {MADE}",
-        None,
-        _EXPORTED,
+        0.03,
+        _EXPORTED + f"; {_TIMED}",
     ),
     _stage(
         "train-member-1",
@@ -194,14 +196,16 @@ STAGES: tuple[Stage, ...] = (
         "calibrate-member-1",
         "calibrate",
         "afford eval prediction --run runs/m1bal --data data/part --no-futures",
-        None,
+        0.67,
+        _TIMED,
     ),
     _stage(
         "export-member-1",
         "export",
         f"afford weights export ensemble/prediction-1.safetensors --run runs/m1bal --out {MADE}",
-        None,
-        "first written by `afford export --member` (the same float16 weights and calibrated config)",
+        0.03,
+        "first written by `afford export --member` (the same float16 weights and calibrated config); "
+        + _TIMED,
     ),
     _stage(
         "train-member-2",
@@ -217,14 +221,16 @@ STAGES: tuple[Stage, ...] = (
         "calibrate-member-2",
         "calibrate",
         "afford eval prediction --run runs/place --data data/part --no-futures",
-        None,
+        0.63,
+        _TIMED,
     ),
     _stage(
         "export-member-2",
         "export",
         f"afford weights export ensemble/prediction-2.safetensors --run runs/place --out {MADE}",
-        None,
-        "first written by `afford export --member` (the same float16 weights and calibrated config)",
+        0.03,
+        "first written by `afford export --member` (the same float16 weights and calibrated config); "
+        + _TIMED,
     ),
     _stage(
         "train-continuous-mixed",
@@ -250,16 +256,16 @@ STAGES: tuple[Stage, ...] = (
         "calibrate-continuous",
         "calibrate",
         "afford eval prediction --run runs/turns --data data/part --no-futures",
-        None,
+        0.68,
         "first fitted one for all action types only (sigmoid(0.85 z - 0.44)), before the fit per type "
-        "existed: made again, the file also carries a scaling per type",
+        f"existed: made again, the file also carries a scaling per type; {_TIMED}",
     ),
     _stage(
         "export-continuous",
         "export",
         f"afford weights export continuous/prediction.safetensors --run runs/turns --out {MADE}",
-        None,
-        "first written by `afford export`, whose recognition net was not kept in continuous/",
+        0.03,
+        f"first written by `afford export`, whose recognition net was not kept in continuous/; {_TIMED}",
     ),
     _stage(
         "train-agreement-8k",
@@ -307,8 +313,8 @@ STAGES: tuple[Stage, ...] = (
         "export-agreement",
         "export",
         f"afford weights export agreement.safetensors --run runs/geom --out {MADE}",
-        None,
-        "float16; how the file was first written is not recorded",
+        0.04,
+        f"float16; how the file was first written is not recorded; {_TIMED}",
     ),
     # The object world model (afford.objects): its datasets have seeds of their own.
     _stage(
@@ -360,8 +366,8 @@ STAGES: tuple[Stage, ...] = (
         "export-dynamics",
         "export",
         f"afford weights export objects/dynamics.safetensors --run runs/dynamics --out {MADE}",
-        None,
-        "float16, with the outcome temperature in its config",
+        0.03,
+        "float16, with the outcome temperature in its config; 0.03 min as made again from this recipe",
     ),
     _stage(
         "train-perception",
@@ -374,8 +380,8 @@ STAGES: tuple[Stage, ...] = (
         "export-perception",
         "export",
         f"afford weights export objects/perception.safetensors --run runs/perception --out {MADE}",
-        None,
-        "float16",
+        0.03,
+        "float16; 0.03 min as made again from this recipe",
     ),
 )
 

@@ -115,7 +115,7 @@ def _sweep(model, scene, task, plan):
     import numpy as np
     import torch
 
-    from afford.planning.oracle import execute_plan
+    from afford.planning.judge import execute_plan
     from afford.sim.affordance import Col, encode_affordance
 
     turns = [i for i, a in enumerate(plan) if a.turn]

@@ -53,7 +53,8 @@ def test_step_outcomes_are_the_candidates_and_carry_on_as_the_picked_step_does()
     with torch.no_grad():
         out = net.step_outcomes(latent, memory, image, rows)
         picked = net.step_hypotheses(latent, memory, image, rows)
-        picked_latent, picked_memory, picked_image, hyp = picked[0], picked[1], picked[2], picked[4]
+        picked_latent, picked_memory, picked_image = picked.latent, picked.memory, picked.image
+        hyp = picked.hypotheses
     assert out.images.shape == (2, 2, 4, 128, 128) and out.probability.shape == (2, 2)
     assert torch.allclose(out.probability.sum(1), torch.ones(2))
     assert torch.allclose(out.images, hyp.candidates)

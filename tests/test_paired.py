@@ -64,7 +64,7 @@ def test_each_outcome_is_drawn_by_its_own_net_and_each_net_keeps_its_own_latent(
         assert torch.equal(out.latent[:, k, c:], own_side.latent[:, k])
     # Forced to the side effect, the pair's next step starts from the side net's drawing.
     step = pair.step_hypotheses(latent, memory, images, rows[:, 0], label=torch.ones(3))
-    assert torch.equal(step[2], own_side.images[:, 1])
+    assert torch.equal(step.image, own_side.images[:, 1])
 
 
 def test_nets_that_cannot_pair_say_why(tmp_path):

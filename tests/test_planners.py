@@ -118,7 +118,7 @@ def test_bench_tasks_counts_each_folder_apart(tmp_path, capsys):
 
 
 def test_random_tasks_are_not_solved_by_doing_nothing(scene):
-    from afford.planning.oracle import execute_plan
+    from afford.planning.judge import execute_plan
     from afford.planning.random_tasks import random_task
 
     made = [t for t in (random_task(scene, seed, max_steps=2) for seed in range(4)) if t is not None]

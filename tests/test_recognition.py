@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import torch
 
+from afford.metrics import Tally, matches
 from afford.recognition.config import PRESETS
-from afford.recognition.metrics import Tally, matches
 from afford.recognition.model import REG, RecognitionNet, fused_for_inference
 from afford.recognition.targets import build_targets, decode, loss, quality, suppress
 from afford.sim import camera

@@ -23,11 +23,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from afford.planning.oracle import execute_plan
+from afford.metrics import matches
+from afford.planning.judge import execute_plan
 from afford.planning.run import WORLD_MODELS, Outcome, PlannerConfig, solve
 from afford.planning.tasks import Task
 from afford.planning.tree import Node, SearchConfig, edges
-from afford.recognition.metrics import matches
 from afford.sim.scene import Scene
 
 CAUSES = ("solved", "oracle fails", "execution", "recognition", "goal", "prediction")

@@ -15,8 +15,9 @@ from afford.errors import UserError
 from afford.planning.branches import BranchingModel
 from afford.planning.closed_loop import Loop, closed_loop
 from afford.planning.hybrid import PROPOSALS, plan_hybrid
+from afford.planning.judge import execute_plan
 from afford.planning.learned import LearnedModel
-from afford.planning.oracle import OracleModel, execute_plan
+from afford.planning.oracle import OracleModel
 from afford.planning.outcome import Outcome, PlannerConfig
 from afford.planning.strategies import search
 from afford.planning.symbolic import plan_symbolic

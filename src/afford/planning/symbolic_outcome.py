@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from afford.planning.oracle import execute_plan
+from afford.planning.judge import execute_plan
 from afford.planning.outcome import Outcome
 from afford.planning.symbolic import CanonicalWorld, plan_symbolic
 from afford.planning.tasks import Task

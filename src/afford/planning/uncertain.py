@@ -134,7 +134,8 @@ class EnsembleModel(WorldModel):
             latent = torch.stack([p.state.latent[k] for p in parents])
             memory = torch.stack([p.state.memory[k] for p in parents])
             image = to_chw(np.stack([p.state.images[k] for p in parents]))
-            latent, memory, image, _, _, log_var = member.step_hypotheses(latent, memory, image, rows)
+            step = member.step_hypotheses(latent, memory, image, rows)
+            latent, memory, image, log_var = step.latent, step.memory, step.image, step.log_variance
             out_latent.append(latent)
             out_memory.append(memory)
             out_images.append(to_hwc(image))

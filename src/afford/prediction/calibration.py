@@ -24,11 +24,11 @@ import torch
 
 from afford.data.format import Dataset
 from afford.images import to_chw
+from afford.metrics import roc_auc
 from afford.prediction.foresight import execution_batches
 from afford.prediction.model import PredictionNet
 from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
-from afford.words.metrics import roc_auc
 
 CALIBRATION_FILE = "calibration.json"  # in a training run, written by `afford eval prediction`
 BATCH = 64

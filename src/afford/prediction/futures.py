@@ -23,8 +23,8 @@ import torch
 from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
 from afford.images import to_hwc
+from afford.metrics import Tally
 from afford.recognition.infer import Recognizer
-from afford.recognition.metrics import Tally
 from afford.sim.affordance import decode_affordance
 
 STEPS = 4

@@ -57,6 +57,36 @@ class Hypotheses:
 
 
 @dataclass
+class Step:
+    """One step carried on (`PredictionNet.step_hypotheses`): the next latent and memory trace
+    (eq. 2), the image drawn and D's difference image (B, C+1, H, W: eq. (3)'s new values and,
+    last, its mask), the K candidates (None with one hypothesis) and the log sigma^2 of the
+    state drawn (B, 1, H, W; None without a variance head)."""
+
+    latent: torch.Tensor
+    memory: torch.Tensor
+    image: torch.Tensor
+    difference: torch.Tensor
+    hypotheses: Hypotheses | None = None
+    log_variance: torch.Tensor | None = None
+
+
+@dataclass
+class Candidates:
+    """A step's K candidates before one is carried on (`PredictionNet.candidates`): dc and the
+    memory trace ((B, K, ...) when forked in the latent, else (B, ...)), the images
+    (B, K, C, H, W), D's differences (B, K, C+1, H, W), the choice head's logits (B, K) and the
+    log variances (B, K, 1, H, W) or None."""
+
+    dc: torch.Tensor
+    memory: torch.Tensor
+    images: torch.Tensor
+    differences: torch.Tensor
+    logits: torch.Tensor
+    log_variance: torch.Tensor | None
+
+
+@dataclass
 class Outcomes:
     """Every outcome of a step (`PredictionNet.step_outcomes`), on a second axis of K: the next
     latents, memory traces and images (B, K, ...) and the probability of each (B, K)."""
@@ -157,10 +187,8 @@ class PredictionNet(Rollouts, nn.Module):
             memory_out = memory_out.index_copy(0, idx, m)
         return dc, memory_out
 
-    def _candidates(self, latent, memory, image, rows):
-        """K > 1: (dc, memory, candidates (B, K, C, H, W), differences (B, K, C+1, H, W),
-        choice logits (B, K), log variances (B, K, 1, H, W) or None); dc and memory (B, K, ...)
-        when forked in the latent."""
+    def candidates(self, latent, memory, image, rows) -> Candidates:
+        """K > 1: every candidate of one step (`Candidates`)."""
         dc, memory_out = self._p_step(latent, memory, image, rows)
         b, k = len(image), self.config.hypotheses
         repeated = image.repeat_interleave(k, 0)
@@ -170,7 +198,7 @@ class PredictionNet(Rollouts, nn.Module):
         )
         differences = difference.view(b, k, -1, *difference.shape[-2:])
         candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)
-        return (
+        return Candidates(
             dc,
             memory_out,
             candidates.view(b, k, *image.shape[1:]),
@@ -188,20 +216,20 @@ class PredictionNet(Rollouts, nn.Module):
         probability of each: what a planner that keeps the alternatives (planning/branches.py)
         grows. One outcome of probability 1 for a one-hypothesis net."""
         if self.config.hypotheses == 1:
-            latent, memory, image, _, _, log_var = self.step_hypotheses(latent, memory, image, rows)
+            step = self.step_hypotheses(latent, memory, image, rows)
             return Outcomes(
-                latent[:, None],
-                memory[:, None],
-                image[:, None],
+                step.latent[:, None],
+                step.memory[:, None],
+                step.image[:, None],
                 image.new_ones(len(image), 1),
-                None if log_var is None else log_var[:, None],
+                None if step.log_variance is None else step.log_variance[:, None],
             )
-        dc, memory_out, candidates, _, logits, log_var = self._candidates(latent, memory, image, rows)
-        next_latent, memory_out = self.outcome_states(latent, dc, memory_out)
-        return Outcomes(next_latent, memory_out, candidates, self.probabilities(logits, rows), log_var)
+        c = self.candidates(latent, memory, image, rows)
+        next_latent, memory_out = self.outcome_states(latent, c.dc, c.memory)
+        return Outcomes(next_latent, memory_out, c.images, self.probabilities(c.logits, rows), c.log_variance)
 
     def outcome_states(self, latent, dc, memory_out) -> tuple[torch.Tensor, torch.Tensor]:
-        """K > 1: every candidate's next latent and memory trace (B, K, ...) from `_candidates`'
+        """K > 1: every candidate's next latent and memory trace (B, K, ...) from `candidates`'
         dc and memory (one for all candidates unless forked in the latent)."""
         k = self.config.hypotheses
         if self.config.fork != "latent":  # one dc and memory for every candidate
@@ -233,40 +261,32 @@ class PredictionNet(Rollouts, nn.Module):
         rows,
         truth: torch.Tensor | None = None,
         label: torch.Tensor | None = None,
-    ):
-        """`step_with_difference`, then with K > 1 hypotheses the `Hypotheses` (else None) and
-        with a variance head the log sigma^2 of the state drawn (B, 1, H, W) (else None): the
-        candidate carried on is the one `label` (B,) names where it is given (training by
-        effect labels), else the one nearest `truth` where that is given (training's
-        winner-takes-all), else the one the choice head finds most likely."""
+    ) -> Step:
+        """One step carried on (`Step`): with K > 1 hypotheses the candidate carried on is the
+        one `label` (B,) names where it is given (training by effect labels), else the one
+        nearest `truth` where that is given (training's winner-takes-all), else the one the
+        choice head finds most likely."""
         k = self.config.hypotheses
         if k == 1:
             dc, memory_out = self._p_step(latent, memory, image, rows)
             difference, log_var = self.decoder.decode(dc, image)
             next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
-            return (
-                next_latent,
-                memory_out,
-                apply_difference(image, difference),
-                difference,
-                None,
-                log_var,
-            )  # eq. (3)
-        dc, memory_out, candidates, differences, logits, log_var = self._candidates(
-            latent, memory, image, rows
-        )
-        picked = self.pick(candidates, differences, logits, image, rows, truth, label)
+            drawn = apply_difference(image, difference)  # eq. (3)
+            return Step(next_latent, memory_out, drawn, difference, None, log_var)
+        c = self.candidates(latent, memory, image, rows)
+        picked = self.pick(c.images, c.differences, c.logits, image, rows, truth, label)
         at = torch.arange(len(image), device=image.device)
+        dc, memory_out = c.dc, c.memory
         if self.config.fork == "latent":  # the candidate carried on gives eq. (2) its dc, and its memory
             dc, memory_out = dc[at, picked], memory_out[at, picked]
         next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
-        return (
+        return Step(
             next_latent,
             memory_out,
-            candidates[at, picked],
-            differences[at, picked],
-            Hypotheses(candidates, logits, picked),
-            None if log_var is None else log_var[at, picked],
+            c.images[at, picked],  # eq. (3), drawn by the candidate
+            c.differences[at, picked],
+            Hypotheses(c.images, c.logits, picked),
+            None if c.log_variance is None else c.log_variance[at, picked],
         )
 
     def pick(self, candidates, differences, logits, image, rows, truth=None, label=None) -> torch.Tensor:

@@ -26,7 +26,7 @@ from pathlib import Path
 import torch
 from torch import nn
 
-from afford.prediction.model import Hypotheses, Outcomes, PredictionNet
+from afford.prediction.model import Hypotheses, Outcomes, PredictionNet, Step
 from afford.prediction.rollout import Rollouts
 
 # The side-effect outcome's net beside a weights folder's prediction net: a folder holding it
@@ -80,9 +80,9 @@ class PairedNet(Rollouts, nn.Module):
             memory.split(self.split[1], 1),
             strict=True,
         ):
-            dc, memory_out, candidates, differences, logits, _ = net._candidates(lat, mem, image, rows)
-            states.append(net.outcome_states(lat, dc, memory_out))
-            drawn.append((candidates, differences, logits))
+            c = net.candidates(lat, mem, image, rows)
+            states.append(net.outcome_states(lat, c.dc, c.memory))
+            drawn.append((c.images, c.differences, c.logits))
         (cm, dm, logits), (cs, ds, _) = drawn
         candidates = torch.stack([cm[:, CANONICAL], cs[:, SIDE]], 1)
         differences = torch.stack([dm[:, CANONICAL], ds[:, SIDE]], 1)
@@ -95,17 +95,16 @@ class PairedNet(Rollouts, nn.Module):
         next_latent, next_memory, candidates, _, logits = self._outcomes(latent, memory, image, rows)
         return Outcomes(next_latent, next_memory, candidates, self.probabilities(logits, rows))
 
-    def step_hypotheses(self, latent, memory, image, rows, truth=None, label=None):
+    def step_hypotheses(self, latent, memory, image, rows, truth=None, label=None) -> Step:
         """PredictionNet.step_hypotheses for the pair: the outcome carried on picked by the main
-        net's rule (`PredictionNet.pick`) among the pair's candidates. No variance (None, last)."""
+        net's rule (`PredictionNet.pick`) among the pair's candidates. No variance."""
         latents, memories, candidates, differences, logits = self._outcomes(latent, memory, image, rows)
         picked = self.main.pick(candidates, differences, logits, image, rows, truth, label)
         at = torch.arange(len(image), device=image.device)
-        return (
+        return Step(
             latents[at, picked],
             memories[at, picked],
             candidates[at, picked],
             differences[at, picked],
             Hypotheses(candidates, logits, picked),
-            None,
         )

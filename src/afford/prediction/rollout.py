@@ -13,12 +13,13 @@ import torch
 
 class Rollouts:
     """Steps and rollouts from a net's `encode(image)` and `step_hypotheses(latent, memory,
-    image, rows, truth, label)` (PredictionNet.step_hypotheses says what each returns)."""
+    image, rows, truth, label)`, which returns a `Step` (model.py)."""
 
     def step_with_difference(self, latent, memory, image, rows):
         """One prediction step, also returning D's difference image (B, C+1, H, W): eq. (3)'s
         new values and, last, its mask."""
-        return self.step_hypotheses(latent, memory, image, rows)[:4]
+        step = self.step_hypotheses(latent, memory, image, rows)
+        return step.latent, step.memory, step.image, step.difference
 
     def step(self, latent, memory, image, rows):
         """One prediction: (c_i, m_i, s_i, a_i) -> (c_{i+1}, m_{i+1}, s_{i+1}).
@@ -73,7 +74,7 @@ class Rollouts:
             n = int(active[i])
             if n == 0:
                 break
-            latent, memory, image, difference, hyp, log_var = self.step_hypotheses(
+            step = self.step_hypotheses(
                 latent[:n],
                 memory[:n],
                 image[:n],
@@ -81,6 +82,8 @@ class Rollouts:
                 None if truth is None else truth[:n, i],
                 None if labels is None else labels[:n, i],
             )
+            latent, memory, image, difference = step.latent, step.memory, step.image, step.difference
+            hyp, log_var = step.hypotheses, step.log_variance
             if states is None:  # made here: under autocast the outputs may be bfloat16
                 states = image.new_zeros((b, length, *image.shape[1:]))
                 differences = difference.new_zeros((b, length, *difference.shape[1:]))

@@ -110,7 +110,8 @@ RECIPES: dict[str, Recipe] = {
         ),
         Recipe(
             "agreement.safetensors",
-            "the agreement model of goal sentences (paper V), cpu preset trained, then trained on in four more stages",
+            "the agreement model of goal sentences (paper V), cpu preset trained, then trained on in "
+            "four more stages",
             (
                 "data-cpu",
                 "data-part",

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from afford.data.format import Dataset
+from afford.metrics import Tally
 from afford.recognition.infer import THRESHOLD_FILE, Recognizer
-from afford.recognition.metrics import Tally
 from afford.sim.affordance import Detection
 from afford.sim.affordances import TYPES
 from afford.training.checkpoint import BEST

@@ -24,13 +24,9 @@ from afford.recognition.model import REG
 from afford.sim import camera
 from afford.sim.affordance import AFF_WIDTH, Affordance, Col, Detection
 from afford.sim.constants import CAMERA
+from afford.sim.geometry import wrap180
 
 ANCHOR_HALF_WIDTH = 45.0
-
-
-def wrap180(a):
-    """Angle difference into [-180, 180)."""
-    return (a + 180.0) % 360.0 - 180.0
 
 
 @dataclass

@@ -12,8 +12,8 @@ from afford.data.augment import AugmentConfig
 from afford.data.format import Dataset
 from afford.data.predicted import PredictedStates, mixed_sampler
 from afford.data.torch_data import RecognitionData, collate_recognition
+from afford.metrics import Tally
 from afford.recognition.config import RecognitionConfig
-from afford.recognition.metrics import Tally
 from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance

@@ -8,6 +8,11 @@ import numpy as np
 QUARTER_TURNS = (0.0, 90.0, 180.0, 270.0)  # gripper angles tried where any may fit
 
 
+def wrap180(a):
+    """Angle difference into [-180, 180)."""
+    return (a + 180.0) % 360.0 - 180.0
+
+
 def rotation(quat: np.ndarray) -> np.ndarray:
     m = np.zeros(9)
     mujoco.mju_quat2Mat(m, quat)

@@ -15,9 +15,9 @@ import torch
 
 from afford.data.format import DataError, Dataset
 from afford.data.predicted import PredictedStates
+from afford.metrics import roc_auc
 from afford.words.data import ClauseData, collate_clauses
 from afford.words.facts import RELATION_NAMES
-from afford.words.metrics import roc_auc
 from afford.words.model import AgreementNet
 
 DRAWS_PER_STATE = 4

@@ -13,11 +13,11 @@ from torch.utils.data import DataLoader
 from afford.data.augment import AugmentConfig
 from afford.data.format import Dataset
 from afford.data.predicted import PredictedStates, mixed_sampler
+from afford.metrics import roc_auc
 from afford.training.distributed import World
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.words.config import AgreementConfig
 from afford.words.data import ClauseBatch, ClauseData, collate_clauses
-from afford.words.metrics import roc_auc
 from afford.words.model import AgreementNet
 from afford.words.sentences import vocabulary
 

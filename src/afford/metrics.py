@@ -1,8 +1,11 @@
-"""The paper's Table 1 criteria (IV.A): recall per type and spurious detections per image.
+"""The measures the nets are judged by, in one place.
 
-A true affordance is found when a detection of its type lies within 2.5 cm of it and within
-5 degrees of its angle (any angle when the true affordance is symmetric). A detection that
-finds no true affordance is spurious.
+- The paper's Table 1 criteria (IV.A), recall per type and spurious detections per image: a
+  true affordance is found when a detection of its type lies within 2.5 cm of it and within 5
+  degrees of its angle (any angle when the true affordance is symmetric); a detection that
+  finds no true affordance is spurious. Recognition on true and on predicted states uses them.
+- ROC AUC: how often a true item scores above a false one (the agreement model's clauses, the
+  prediction net's choice head).
 """
 
 from __future__ import annotations
@@ -11,9 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from afford.recognition.targets import wrap180
 from afford.sim.affordance import Detection
 from afford.sim.affordances import TYPES, Affordance
+from afford.sim.geometry import wrap180
 
 MATCH_RADIUS = 0.025  # metres
 MATCH_ANGLE = 5.0  # degrees
@@ -66,3 +69,20 @@ class Tally:
             "recall": self.recall,
         }
         return {"images": self.images, "recall": per, "spurious_per_image": self.spurious_per_image}
+
+
+def roc_auc(scores: np.ndarray, truths: np.ndarray) -> float:
+    """The chance that a random true item scores above a random false one (ties count half);
+    NaN when either class is missing. Ranks, so O(n log n)."""
+    scores, truths = np.asarray(scores, dtype=float), np.asarray(truths).astype(bool)
+    pos, neg = int(truths.sum()), int((~truths).sum())
+    if pos == 0 or neg == 0:
+        return float("nan")
+    order = np.argsort(scores, kind="mergesort")
+    ranks = np.empty(len(scores))
+    ranks[order] = np.arange(1, len(scores) + 1)
+    ordered = np.sort(scores)
+    for value in np.unique(ordered[1:][np.diff(ordered) == 0]):  # tied scores share their mean rank
+        tied = scores == value
+        ranks[tied] = ranks[tied].mean()
+    return float((ranks[truths].sum() - pos * (pos + 1) / 2) / (pos * neg))

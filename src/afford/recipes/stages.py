@@ -2,9 +2,9 @@
 
 A stage is a dataset made (`afford generate`, `afford data predict`), a training run, a
 calibration (`afford eval`, which writes a cut-off or a head's scaling into the run) or an
-export (`afford weights export`). Its minutes are those recorded on 2 cores; None where no time
-was recorded. Its note says how the first run differed from the command here, or what is not
-known of it.
+export (`afford weights export`). Its minutes are those measured on 2 cores (None: not measured);
+its note says how they were measured where not by the run that made the shipped file, how that
+run differed from the command here, or what is not known of it.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ class Stage:
     name: str  # unique; also its stamp's file name
     kind: str  # one of KINDS
     command: str  # one `afford` command line, run in the repository root
-    minutes: float | None  # on 2 cores, as recorded; None: never recorded
+    minutes: float | None  # on 2 cores, as measured; None: never measured
     note: str = ""  # how the first run differed, or what is not known of it
 
     @property
@@ -367,7 +367,7 @@ STAGES: tuple[Stage, ...] = (
         "export",
         f"afford weights export objects/dynamics.safetensors --run runs/dynamics --out {MADE}",
         0.03,
-        "float16, with the outcome temperature in its config; 0.03 min as made again from this recipe",
+        "float16, with the outcome temperature in its config; timed as made again from this recipe",
     ),
     _stage(
         "train-perception",
@@ -381,7 +381,7 @@ STAGES: tuple[Stage, ...] = (
         "export",
         f"afford weights export objects/perception.safetensors --run runs/perception --out {MADE}",
         0.03,
-        "float16; 0.03 min as made again from this recipe",
+        "float16; timed as made again from this recipe",
     ),
 )
 

@@ -51,7 +51,7 @@ def test_eval_draws_each_outcome_forced_beside_the_heads_pick(tmp_path, small_da
     torch.manual_seed(0)
     net = PredictionNet(EFFECT).eval()
     images, actions = torch.rand(2, 4, 128, 128), torch.zeros(2, 2, 7)
-    candidates = net.rollout_hypotheses(images, actions)[2]
+    candidates = net.rollout_hypotheses(images, actions).candidates
     for k in range(2):
         assert torch.equal(forced(net, k, images, actions), candidates[:, :, k])
     save_checkpoint(tmp_path / "run" / "best.safetensors", net, "prediction", asdict(EFFECT), 1)

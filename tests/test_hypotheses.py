@@ -36,12 +36,13 @@ def test_shapes_and_the_pick_follows_the_truth_or_the_choice_head():
     torch.manual_seed(0)
     net = PredictionNet(replace(TINY, hypotheses=3))
     images = two_outcomes(4)
-    states, differences, candidates, logits, picks, _ = net(images[:, 0], place_rows(4), None, images[:, 1:])
+    rolled = net(images[:, 0], place_rows(4), None, images[:, 1:])
+    states, candidates, logits, picks = rolled.states, rolled.candidates, rolled.logits, rolled.picks
     assert candidates.shape == (4, 1, 3, 4, 128, 128) and logits.shape == (4, 1, 3) and picks.shape == (4, 1)
     for b in range(4):
         assert torch.equal(states[b, 0], candidates[b, 0, picks[b, 0]])
     free = net.rollout_hypotheses(images[:, 0], place_rows(4))
-    assert torch.equal(free[4], free[3].argmax(-1))  # planning: the most likely
+    assert torch.equal(free.picks, free.logits.argmax(-1))  # planning: the most likely
     with pytest.raises(ValueError, match="hypotheses"):
         PredictionNet(replace(PRESETS["tiny-dense"], hypotheses=2))
 
@@ -52,7 +53,8 @@ def test_effect_labels_pick_the_candidate_and_teach_the_head():
     net = PredictionNet(config)
     images = two_outcomes(4)
     labels = torch.tensor([[True], [False], [False], [True]])
-    _, _, _, logits, picks, _ = net(images[:, 0], place_rows(4), None, images[:, 1:], labels)
+    rolled = net(images[:, 0], place_rows(4), None, images[:, 1:], labels)
+    picks = rolled.picks
     assert picks[:, 0].tolist() == [1, 0, 0, 1]  # the labels, not the winners
     # Three of the four alike runs labelled: with two and two the head's gradient is zero
     # exactly (same features, the labels' pulls cancel), and only float noise moved it.
@@ -67,7 +69,7 @@ def test_effect_labels_pick_the_candidate_and_teach_the_head():
     with torch.no_grad():
         for cut, expected in ((0.0, 1), (1.0, 0)):
             net.config = replace(config, effect_threshold=cut)
-            assert net.rollout_hypotheses(images[:, 0], place_rows(4))[4].eq(expected).all()
+            assert net.rollout_hypotheses(images[:, 0], place_rows(4)).picks.eq(expected).all()
 
 
 def test_the_winner_is_the_candidate_nearest_the_truth_where_it_changed():
@@ -105,10 +107,10 @@ def test_two_hypotheses_draw_both_outcomes_where_one_image_blurs():
         with torch.no_grad():
             out = net.rollout_hypotheses(images[:, 0], rows)
         if k == 1:
-            spots[k] = out[0][:, 0, :3, r - 5 : r + 5, c - 5 : c + 5].mean()
+            spots[k] = out.states[:, 0, :3, r - 5 : r + 5, c - 5 : c + 5].mean()
         else:
-            spots[k] = out[2][0, 0, :, :3, r - 5 : r + 5, c - 5 : c + 5].mean((1, 2, 3))
-            probabilities = out[3][0, 0].softmax(-1)
+            spots[k] = out.candidates[0, 0, :, :3, r - 5 : r + 5, c - 5 : c + 5].mean((1, 2, 3))
+            probabilities = out.logits[0, 0].softmax(-1)
     assert 0.3 < spots[1] < 0.7  # one image: between the two, neither
     assert spots[2].max() > 0.75 and spots[2].min() < 0.25  # two: each outcome
     assert probabilities.min() > 0.2  # and the belief is split, as the data is
@@ -140,7 +142,8 @@ def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the
     images, rows = two_outcomes(2), place_rows(2)
     with torch.no_grad():
         a = one.rollout(images[:, 0], rows)
-        _, _, candidates, logits, _, _ = many.rollout_hypotheses(images[:, 0], rows)
+        rolled = many.rollout_hypotheses(images[:, 0], rows)
+        candidates, logits = rolled.candidates, rolled.logits
     assert candidates.shape == (2, 1, 2, 4, 128, 128) and logits.shape == (2, 1, 2)
     assert torch.allclose(a[:, 0], candidates[:, 0, 0], atol=1e-6)
     assert 0 < (candidates[:, 0, 1] - candidates[:, 0, 0]).abs().max() < 0.1
@@ -204,8 +207,9 @@ def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
     load_model_state(net, tensors, "pooled.safetensors")
     images, rows = two_outcomes(2), place_rows(2)
     with torch.no_grad():
-        a = old.rollout_hypotheses(images[:, 0], rows)[2]
-        b, logits = net.rollout_hypotheses(images[:, 0], rows)[2:4]
+        a = old.rollout_hypotheses(images[:, 0], rows).candidates
+        rolled = net.rollout_hypotheses(images[:, 0], rows)
+        b, logits = rolled.candidates, rolled.logits
     assert torch.equal(a, b) and torch.equal(logits, torch.zeros_like(logits))
     moved = _moved_by_training(net, config)
     assert moved and all(k.startswith("decoder.choice") for k in moved)
@@ -225,8 +229,8 @@ def test_deeper_forks_load_a_shallow_two_outcome_net_and_draw_the_same_at_first(
     load_model_state(net, tensors, "shallow.safetensors")
     images, rows = two_outcomes(2), place_rows(2)
     with torch.no_grad():
-        a = old.rollout_hypotheses(images[:, 0], rows)[2]
-        b = net.rollout_hypotheses(images[:, 0], rows)[2]
+        a = old.rollout_hypotheses(images[:, 0], rows).candidates
+        b = net.rollout_hypotheses(images[:, 0], rows).candidates
     assert torch.allclose(a, b, atol=1e-6)
     moved = _moved_by_training(net, deep)
     assert any(".forks.0.before.0." in k for k in moved) and all(".forks." in k for k in moved)

@@ -83,11 +83,11 @@ def test_the_head_gives_a_variance_per_pixel_in_range_and_alone_learns():
     net = PredictionNet(config)
     images, rows = two_outcomes(2), place_rows(2)
     with torch.no_grad():
-        log_vars = net.rollout_hypotheses(images[:, 0], rows)[5]
+        log_vars = net.rollout_hypotheses(images[:, 0], rows).log_variance
     assert log_vars.shape == (2, 1, 1, 128, 128)
     lo, hi = LOG_VARIANCE_RANGE
     assert lo <= float(log_vars.min()) and float(log_vars.max()) <= hi
-    assert PredictionNet(TINY).rollout_hypotheses(images[:, 0], rows)[5] is None
+    assert PredictionNet(TINY).rollout_hypotheses(images[:, 0], rows).log_variance is None
     opt = make_optimizer(net, config)
     before = {k: v.clone() for k, v in net.state_dict().items()}
     losses = []

@@ -59,7 +59,7 @@ def head_logits(net: PredictionNet, data: Dataset, split: str, limit: int | None
     for batch in execution_batches(data, split, limit, BATCH):
         images = to_chw(np.stack([seq.image(t) for _, seq, t in batch]))
         actions = torch.from_numpy(np.stack([seq.actions[t] for _, seq, t in batch]))[:, None]
-        logits = net.rollout_hypotheses(images, actions)[3]
+        logits = net.rollout_hypotheses(images, actions).logits
         z.extend((logits[:, 0, 1] - logits[:, 0, 0]).float().tolist())
         labels.extend(not step.canonical for step, _, _ in batch)
         kinds.extend(actions[:, 0, Col.TYPE].long().tolist())

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from afford.prediction.model import PredictionNet
+from afford.prediction.rollout import Rollout
 from afford.prediction.variance import outcome_variance, total_variance
 
 MEMBERS_DIR = "ensemble"  # in a weights folder: the members beside its prediction net
@@ -134,7 +135,7 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
         outs, variances = [], []
         for m in members:
             rolled = m.rollout_hypotheses(images[:, 0], actions, lengths)
-            outs.append(rolled[0])
+            outs.append(rolled.states)
             variances.append(member_variance(m, rolled, actions))
         outs = torch.stack(outs)  # (K, B, L, C, H, W)
         mean = outs.mean(0)
@@ -159,12 +160,12 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
     )
 
 
-def member_variance(net: PredictionNet, rolled: tuple, actions: torch.Tensor) -> torch.Tensor:
+def member_variance(net: PredictionNet, rolled: Rollout, actions: torch.Tensor) -> torch.Tensor:
     """A member's own variance per pixel of each state it rolled out (B, L, H, W), from its
     `rollout_hypotheses` of `actions` (B, L, 7): its variance head's, plus, for a net with a
     side-effect outcome, the spread of its outcomes about the one it drew
     (`variance.outcome_variance`)."""
-    states, _, candidates, logits, _, log_var = rolled
+    states, candidates, logits, log_var = rolled.states, rolled.candidates, rolled.logits, rolled.log_variance
     variance = torch.zeros_like(states[:, :, 0]) if log_var is None else net.variance(log_var)[:, :, 0]
     if candidates is not None and net.config.hypotheses_by == "effect":
         b, length = logits.shape[:2]

@@ -169,7 +169,7 @@ def forced(net: PredictionNet, k: int, images: torch.Tensor, actions: torch.Tens
     """A many-outcome net's rollout with its k-th outcome drawn at every step, whatever its
     head picks (the state carried on is still the head's)."""
     with torch.no_grad():
-        return net.rollout_hypotheses(images, actions)[2][:, :, k]
+        return net.rollout_hypotheses(images, actions).candidates[:, :, k]
 
 
 # ---------------------------------------------------------------------------- pictures

@@ -8,7 +8,24 @@ through it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
+
+
+@dataclass
+class Rollout:
+    """A batch rolled out (`Rollouts.rollout_hypotheses`): the predicted states (B, L, C, H, W)
+    and D's differences (B, L, C+1, H, W) after each of L actions; with K > 1 hypotheses every
+    step's candidates (B, L, K, C, H, W), choice logits (B, L, K) and picks (B, L) (else None);
+    with a variance head the log sigma^2 of each state (B, L, 1, H, W) (else None)."""
+
+    states: torch.Tensor
+    differences: torch.Tensor
+    candidates: torch.Tensor | None = None
+    logits: torch.Tensor | None = None
+    picks: torch.Tensor | None = None
+    log_variance: torch.Tensor | None = None
 
 
 class Rollouts:
@@ -37,7 +54,8 @@ class Rollouts:
         With `steps` (B,), run k stops after steps[k] actions (its later outputs are zeros):
         padded steps of a batch cost nothing.
         """
-        return self.rollout_hypotheses(image, actions, steps)[:2]
+        rolled = self.rollout_hypotheses(image, actions, steps)
+        return rolled.states, rolled.differences
 
     def rollout_hypotheses(
         self,
@@ -46,12 +64,9 @@ class Rollouts:
         steps: torch.Tensor | None = None,
         truth: torch.Tensor | None = None,
         labels: torch.Tensor | None = None,
-    ) -> tuple:
-        """`rollout_with_differences`, and with K > 1 hypotheses also every step's candidates
-        (B, L, K, C, H, W), logits (B, L, K) and picks (B, L) (else None, None, None), and with
-        a variance head the log sigma^2 of each state (B, L, 1, H, W) (else None); with `truth`
-        (B, L, C, H, W) each step carries on its winner, with `labels` (B, L) the candidate they
-        name (`step_hypotheses`)."""
+    ) -> Rollout:
+        """Every step of each run (`Rollout`); with `truth` (B, L, C, H, W) each step carries
+        on its winner, with `labels` (B, L) the candidate they name (`step_hypotheses`)."""
         b, length = actions.shape[:2]
         at = image.device
         order = (
@@ -101,7 +116,7 @@ class Rollouts:
                 picks[order[:n], i] = hyp.picked
             if log_var is not None:
                 log_vars[order[:n], i] = log_var
-        return states, differences, candidates, logits, picks, log_vars
+        return Rollout(states, differences, candidates, logits, picks, log_vars)
 
     # Training's forward pass: a call through the module (`net(...)`), so that
     # DistributedDataParallel sees it.

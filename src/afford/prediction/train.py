@@ -91,9 +91,9 @@ def sequence_loss(
     if many and c.hypotheses_by == "effect" and effects is not None and not own_pick:  # else the winner
         labels = effects.flatten(2).any(-1)  # (B, L): the step had a side effect
     with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
-        predicted, differences, candidates, logits, picks, log_vars = net(
-            images[:, 0], actions, steps, truth if many and not own_pick else None, labels
-        )
+        rolled = net(images[:, 0], actions, steps, truth if many and not own_pick else None, labels)
+        predicted, differences, candidates = rolled.states, rolled.differences, rolled.candidates
+        logits, picks, log_vars = rolled.logits, rolled.picks, rolled.log_variance
     predicted, differences = predicted.float(), differences.float()
     diff = predicted - truth
     err = c.loss_mse * (diff**2).sum(2).mean((-2, -1))  # (B, L)

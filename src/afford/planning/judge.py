@@ -1,8 +1,9 @@
 """Every planner's plan judged the same way: executed in the simulator from the task's start,
 open loop as the paper does (IV.C), and its success predicate read on the final true state.
 
-The oracle, the symbolic baselines and every learned world model hand their plan here, so a
-plan counts as solved by one rule whatever made it.
+Every planner's open-loop plan is handed here (the oracle's, the symbolic baselines', every
+learned world model's), so a plan counts as solved by one rule whatever made it; a closed loop
+executes as it plans (closed_loop.py) and reads the same predicate on the state it ends in.
 """
 
 from __future__ import annotations

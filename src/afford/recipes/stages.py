@@ -170,7 +170,7 @@ STAGES: tuple[Stage, ...] = (
         "export",
         f"afford weights export prediction.safetensors --run runs/scratch-clip --out {MADE}",
         0.03,
-        _EXPORTED + f"; {_TIMED}",
+        f"{_EXPORTED}; {_TIMED}",
     ),
     _stage(
         "train-member-1",

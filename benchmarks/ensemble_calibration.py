@@ -50,14 +50,14 @@ def main() -> None:
     from afford.shipped import load_learned
 
     members = load_learned(args.weights).members
-    torch.set_num_threads(members[0].config.threads)
+    torch.set_num_threads(members[0].config.training.threads)
     data = Dataset(args.data)
     val = calibrate(members, data, "val", limit=args.runs)
     cal = calibrate(members, data, "test", limit=args.runs)
     scale = val.fitted_scale()
-    trained_scale = members[0].config.variance_scale  # already in the members' variance
+    trained_scale = members[0].config.model.variance_scale  # already in the members' variance
     what = "members' spread"
-    if any(m.config.variance for m in members):  # the spread panels show the state's whole std
+    if any(m.config.model.variance for m in members):  # the spread panels show the state's whole std
         cal = replace(cal, spread=np.sqrt(cal.variance), pixel_spread=np.sqrt(cal.pixel_variance))
         what = "predicted std (variance heads and spread)"
     live = cal.pixel_spread > DISAGREE

@@ -33,9 +33,9 @@ def main() -> None:
     from afford.sim.affordances import TYPES
 
     net = load_learned(args.weights).predictor.eval()
-    if net.config.hypotheses_by != "effect":
+    if net.config.outcomes.hypotheses_by != "effect":
         raise SystemExit("head_by_type: the prediction net has no side-effect head")
-    torch.set_num_threads(net.config.threads)
+    torch.set_num_threads(net.config.training.threads)
     data = Dataset(args.data)
 
     (zv, yv, tv), (zt, yt, tt) = head_logits(net, data, "val"), head_logits(net, data, "test")

@@ -130,9 +130,9 @@ def head_probabilities(
     from afford.shipped import load_learned
 
     net = load_learned(weights).predictor.eval()
-    if net.config.hypotheses < 2:
+    if net.config.outcomes.hypotheses < 2:
         raise SystemExit("place_outcomes: --weights needs a prediction net with two outcomes per step")
-    torch.set_num_threads(net.config.threads)
+    torch.set_num_threads(net.config.training.threads)
     data = Dataset(root)
     probabilities: dict[tuple, list[float]] = {}
     for i in list(data.indices(split))[:limit]:

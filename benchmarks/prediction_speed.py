@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import replace
 
 import numpy as np
 import torch
@@ -21,6 +20,7 @@ import torch
 from afford.prediction.config import PRESETS
 from afford.prediction.model import PredictionNet
 from afford.prediction.train import make_optimizer, sequence_loss
+from afford.training.fields import with_fields
 from afford.training.memory import keep_freed_memory
 
 PAPER_BATCHES = 1_000_000
@@ -44,7 +44,7 @@ def random_batch(b: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
 def profile(config, repeats: int, batch_source=None) -> dict:
     net = PredictionNet(config)
     opt = make_optimizer(net, config)
-    batch = random_batch(config.batch_size)
+    batch = random_batch(config.training.batch_size)
     sequence_loss(net, *batch).backward()  # warm-up
     times = {"batch": 0.0, "forward": 0.0, "backward": 0.0, "optimizer": 0.0}
     t_all = time.perf_counter()
@@ -101,7 +101,7 @@ def main() -> None:
     result = {"threads": args.threads, "keep_freed_memory": not args.no_keep_memory}
     cases = {
         "cpu": PRESETS["cpu"],
-        "cpu bf16": replace(PRESETS["cpu"], bf16=True),
+        "cpu bf16": with_fields(PRESETS["cpu"], bf16=True),
         "dense-cpu": PRESETS["dense-cpu"],
         "paper": PRESETS["paper"],
     }

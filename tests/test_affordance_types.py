@@ -19,6 +19,7 @@ from afford.sim.affordance import decode_affordance, encode_affordance
 from afford.sim.affordance_types import REGISTRY, AffordanceType, type_index
 from afford.sim.affordances import Affordance, parametrise
 from afford.sim.scene import ObjectSpec
+from afford.training.fields import with_fields
 from afford.viz.draw import draw_affordances
 
 HOVER = 0.08  # metres above the cup's centre
@@ -73,7 +74,7 @@ def test_the_nets_take_a_registered_type_from_their_config(poke):
     rows = encode_affordance(Affordance("poke", (0.05, 0.3, 0.0425), 0.0, True))[None]
     total, _ = loss(raw, build_targets([rows], rec), rec)
     total.backward()  # a type logit and regression of its own
-    pred = replace(PRED["tiny"], types=types)
+    pred = with_fields(PRED["tiny"], types=types)
     net = PredictionNet(pred)
     assert len(net.modules_by_type) == 4  # one P^a per type (paper II.C)
     image = torch.rand(1, 4, 128, 128)

@@ -4,7 +4,6 @@ and the expected eq. (5)."""
 from __future__ import annotations
 
 import copy
-from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -24,8 +23,9 @@ from afford.recognition.model import RecognitionNet
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 from afford.sim.scene import ObjectSpec
+from afford.training.fields import with_fields
 
-FORKED = replace(PRED["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
+FORKED = with_fields(PRED["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
 SPECS = [ObjectSpec.upright("cup", 0.05, 0.3), ObjectSpec.upright("block", -0.05, 0.22)]
 GRASP = Affordance("grasp", (0.05, 0.3, 0.0425), 0.0, True)
 TURN = Affordance("turn", (-0.05, 0.22, 0.025), 0.0, False, 90)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import asdict
 
 import numpy as np
 import torch
@@ -12,8 +12,9 @@ from afford.prediction.config import PRESETS
 from afford.prediction.evaluate import load_net
 from afford.prediction.model import PredictionNet
 from afford.training.checkpoint import export_weights, save_checkpoint
+from afford.training.fields import with_fields
 
-EFFECT = replace(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
+EFFECT = with_fields(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
 
 
 def test_platt_scaling_recovers_the_scale_and_bias_the_labels_were_drawn_with():
@@ -28,7 +29,7 @@ def test_platt_scaling_recovers_the_scale_and_bias_the_labels_were_drawn_with():
 
 def test_the_net_reads_its_head_through_the_calibration_and_export_keeps_it(tmp_path):
     logits = torch.tensor([[0.0, 2.0], [1.0, -1.0]])
-    net = PredictionNet(replace(EFFECT, choice_scale=0.5, choice_bias=-1.0))
+    net = PredictionNet(with_fields(EFFECT, choice_scale=0.5, choice_bias=-1.0))
     side = net.probabilities(logits)[:, 1]
     assert torch.allclose(side, torch.sigmoid(torch.tensor([0.0, -2.0])))
     assert torch.allclose(net.probabilities(logits).sum(1), torch.ones(2))
@@ -42,7 +43,7 @@ def test_the_net_reads_its_head_through_the_calibration_and_export_keeps_it(tmp_
         config={"choice_scale": 0.5, "choice_bias": -1.0},
     )
     _, config = load_net(tmp_path / "w.safetensors")
-    assert (config.choice_scale, config.choice_bias) == (0.5, -1.0)
+    assert (config.outcomes.choice_scale, config.outcomes.choice_bias) == (0.5, -1.0)
 
 
 def test_eval_draws_each_outcome_forced_beside_the_heads_pick(tmp_path, small_dataset):
@@ -74,7 +75,7 @@ def test_the_head_is_read_through_its_action_types_own_scaling_where_the_config_
     labels = rng.random(len(z)) < 1 / (1 + np.exp(-per_type_logits(z, kinds, *truth)))
     scales, biases = fit_per_type(z, labels, kinds)
     assert np.allclose(scales, truth[0], atol=0.1) and np.allclose(biases, truth[1], atol=0.12)
-    net = PredictionNet(replace(EFFECT, choice_scales=tuple(scales), choice_biases=tuple(biases)))
+    net = PredictionNet(with_fields(EFFECT, choice_scales=tuple(scales), choice_biases=tuple(biases)))
     logits = torch.tensor([[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])
     rows = torch.zeros(3, 7)
     rows[:, 0] = torch.tensor([0.0, 1.0, 2.0])  # a grasp, a place, a turn

@@ -168,7 +168,7 @@ def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, cap
     assert main([*pair, "--member", str(runs / "member"), "--out", str(tmp_path / "two")]) == 0
     assert (tmp_path / "two" / "ensemble" / "prediction-1.safetensors").is_file()
     members = load_learned(tmp_path / "two").members
-    head = (members[1].config.choice_scale, members[1].config.choice_bias)
+    head = (members[1].config.outcomes.choice_scale, members[1].config.outcomes.choice_bias)
     assert len(members) == 2 and head == (0.5, -1.0)
     capsys.readouterr()
     task = "tasks/uncertain/01-cup-near-a-tipping-edge.json"

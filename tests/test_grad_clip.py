@@ -1,11 +1,10 @@
 """grad_clip: one wild batch moves the weights by no more than the clip allows."""
 
-from dataclasses import replace
-
 import torch
 from torch import nn
 
 from afford.prediction.config import PRESETS
+from afford.training.fields import with_fields
 from afford.training.loop import Loop, _Run
 
 
@@ -14,7 +13,7 @@ def _moved(tmp_path, clip: float) -> float:
     nn.init.zeros_(model.weight)
     loop = Loop(
         kind="prediction",
-        config=replace(PRESETS["tiny"], lr=1.0, grad_clip=clip),
+        config=with_fields(PRESETS["tiny"], lr=1.0, grad_clip=clip),
         model=model,
         optimizer=torch.optim.SGD(model.parameters(), lr=1.0),
         batches=[torch.ones(1, 1)],

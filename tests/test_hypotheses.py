@@ -1,6 +1,4 @@
-"""Several outcomes per step (PredictionConfig.hypotheses): winner-takes-all and the choice head."""
-
-from dataclasses import replace
+"""Several outcomes per step (PredictionConfig.outcomes.hypotheses): winner-takes-all and the choice head."""
 
 import numpy as np
 import pytest
@@ -13,6 +11,7 @@ from afford.sim import camera
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 from afford.training.checkpoint import load_model_state
+from afford.training.fields import with_fields
 
 TINY = PRESETS["tiny"]
 PLACE = Affordance("place", (0.1, 0.3, 0.06), 0, True)
@@ -34,7 +33,7 @@ def two_outcomes(n: int) -> torch.Tensor:
 
 def test_shapes_and_the_pick_follows_the_truth_or_the_choice_head():
     torch.manual_seed(0)
-    net = PredictionNet(replace(TINY, hypotheses=3))
+    net = PredictionNet(with_fields(TINY, hypotheses=3))
     images = two_outcomes(4)
     rolled = net(images[:, 0], place_rows(4), None, images[:, 1:])
     states, candidates, logits, picks = rolled.states, rolled.candidates, rolled.logits, rolled.picks
@@ -44,12 +43,12 @@ def test_shapes_and_the_pick_follows_the_truth_or_the_choice_head():
     free = net.rollout_hypotheses(images[:, 0], place_rows(4))
     assert torch.equal(free.picks, free.logits.argmax(-1))  # planning: the most likely
     with pytest.raises(ValueError, match="hypotheses"):
-        PredictionNet(replace(PRESETS["tiny-dense"], hypotheses=2))
+        PredictionNet(with_fields(PRESETS["tiny-dense"], hypotheses=2))
 
 
 def test_effect_labels_pick_the_candidate_and_teach_the_head():
     torch.manual_seed(0)
-    config = replace(TINY, hypotheses=2, hypotheses_by="effect")
+    config = with_fields(TINY, hypotheses=2, hypotheses_by="effect")
     net = PredictionNet(config)
     images = two_outcomes(4)
     labels = torch.tensor([[True], [False], [False], [True]])
@@ -64,11 +63,11 @@ def test_effect_labels_pick_the_candidate_and_teach_the_head():
     loss.backward()
     assert net.decoder.choice.weight.grad.abs().sum() > 0  # the head learns the labels
     with pytest.raises(ValueError, match="hypotheses=2"):
-        PredictionNet(replace(TINY, hypotheses=3, hypotheses_by="effect"))
+        PredictionNet(with_fields(TINY, hypotheses=3, hypotheses_by="effect"))
     # In use the side-effect outcome is carried on where the head gives it more than the cut-off.
     with torch.no_grad():
         for cut, expected in ((0.0, 1), (1.0, 0)):
-            net.config = replace(config, effect_threshold=cut)
+            net.config = with_fields(config, effect_threshold=cut)
             assert net.rollout_hypotheses(images[:, 0], place_rows(4)).picks.eq(expected).all()
 
 
@@ -97,7 +96,7 @@ def test_two_hypotheses_draw_both_outcomes_where_one_image_blurs():
     spots = {}
     for k in (1, 2):
         torch.manual_seed(0)
-        net = PredictionNet(replace(TINY, hypotheses=k))
+        net = PredictionNet(with_fields(TINY, hypotheses=k))
         opt = torch.optim.Adam(net.parameters(), lr=3e-3)
         for _ in range(200):
             loss = sequence_loss(net, images, rows, torch.ones(4, dtype=torch.long))
@@ -120,7 +119,7 @@ def test_a_one_hypothesis_checkpoint_loads_into_k_and_predicts_the_same_at_first
     torch.manual_seed(0)
     one = PredictionNet(TINY)
     tensors = {f"model.{k}": v for k, v in one.state_dict().items()}
-    many = PredictionNet(replace(TINY, hypotheses=2))
+    many = PredictionNet(with_fields(TINY, hypotheses=2))
     load_model_state(many, tensors, "one.safetensors")
     images = two_outcomes(2)
     with torch.no_grad():
@@ -136,7 +135,7 @@ def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the
     torch.manual_seed(0)
     one = PredictionNet(TINY)
     tensors = {f"model.{k}": v for k, v in one.state_dict().items()}
-    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
+    config = with_fields(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
     many = PredictionNet(config)
     load_model_state(many, tensors, "one.safetensors")
     images, rows = two_outcomes(2), place_rows(2)
@@ -154,7 +153,7 @@ def test_forked_in_the_latent_each_candidate_has_its_own_dc_and_the_first_is_the
     place = many.modules_by_type[1]
     assert place.forks[0].out.weight.grad.abs().sum() > 0
     with pytest.raises(ValueError, match="fork"):
-        PredictionNet(replace(TINY, hypotheses=2, fork="encoder"))
+        PredictionNet(with_fields(TINY, hypotheses=2, fork="encoder"))
 
 
 def _moved_by_training(net: PredictionNet, config) -> set[str]:
@@ -179,17 +178,19 @@ def test_training_only_the_other_outcomes_keeps_the_first_exactly():
     from afford.prediction.train import make_optimizer
 
     torch.manual_seed(0)
-    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="outcomes")
+    config = with_fields(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="outcomes")
     net = PredictionNet(config)
     moved = _moved_by_training(net, config)
     assert moved and all(".forks." in k or k.startswith("decoder.choice") for k in moved)
     with pytest.raises(ValueError, match="nothing to train"):
-        make_optimizer(PredictionNet(replace(TINY, trained="outcomes")), replace(TINY, trained="outcomes"))
+        make_optimizer(
+            PredictionNet(with_fields(TINY, trained="outcomes")), with_fields(TINY, trained="outcomes")
+        )
 
 
 def test_training_only_the_side_effect_outcome_keeps_the_head_and_the_first_outcome():
     torch.manual_seed(0)
-    config = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="side")
+    config = with_fields(TINY, hypotheses=2, hypotheses_by="effect", fork="latent", trained="side")
     net = PredictionNet(config)
     moved = _moved_by_training(net, config)
     assert moved and all(".forks." in k for k in moved)
@@ -199,10 +200,10 @@ def test_a_head_on_the_grid_replaces_a_pooled_one_and_alone_learns():
     """choice_head=grid: a two-outcome checkpoint with the pooled head loads with the new head
     as initialised (uniform) and every outcome as it was; trained=head moves the head alone."""
     torch.manual_seed(0)
-    pooled = replace(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
+    pooled = with_fields(TINY, hypotheses=2, hypotheses_by="effect", fork="latent")
     old = PredictionNet(pooled)
     tensors = {f"model.{k}": v for k, v in old.state_dict().items()}
-    config = replace(pooled, choice_head="grid", choice_channels=4, trained="head")
+    config = with_fields(pooled, choice_head="grid", choice_channels=4, trained="head")
     net = PredictionNet(config)
     load_model_state(net, tensors, "pooled.safetensors")
     images, rows = two_outcomes(2), place_rows(2)
@@ -221,10 +222,10 @@ def test_deeper_forks_load_a_shallow_two_outcome_net_and_draw_the_same_at_first(
     predict exactly as before (the new block a copy of the trunk's), and trained=side moves
     the new block with the rest of the fork, never the trunk."""
     torch.manual_seed(0)
-    shallow = replace(TINY, p_blocks=2, hypotheses=2, hypotheses_by="effect", fork="latent")
+    shallow = with_fields(TINY, p_blocks=2, hypotheses=2, hypotheses_by="effect", fork="latent")
     old = PredictionNet(shallow)
     tensors = {f"model.{k}": v for k, v in old.state_dict().items()}
-    deep = replace(shallow, fork_blocks=2, trained="side")
+    deep = with_fields(shallow, fork_blocks=2, trained="side")
     net = PredictionNet(deep)
     load_model_state(net, tensors, "shallow.safetensors")
     images, rows = two_outcomes(2), place_rows(2)
@@ -235,4 +236,4 @@ def test_deeper_forks_load_a_shallow_two_outcome_net_and_draw_the_same_at_first(
     moved = _moved_by_training(net, deep)
     assert any(".forks.0.before.0." in k for k in moved) and all(".forks." in k for k in moved)
     with pytest.raises(ValueError, match="fork_blocks"):
-        PredictionNet(replace(shallow, fork_blocks=3))
+        PredictionNet(with_fields(shallow, fork_blocks=3))

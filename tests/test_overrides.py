@@ -13,7 +13,12 @@ def test_values_take_the_fields_types():
     c = apply_overrides(
         PREDICTION["cpu"], ["lr=3e-4", "repair=true", "steps=10", "encoder_channels=8, 16,16"]
     )
-    assert (c.lr, c.repair, c.steps, c.encoder_channels) == (3e-4, True, 10, (8, 16, 16))
+    assert (c.training.lr, c.loss.repair, c.training.steps, c.model.encoder_channels) == (
+        3e-4,
+        True,
+        10,
+        (8, 16, 16),
+    )
     r = apply_overrides(RECOGNITION["cpu"], ["type_weights=1,1,3"])
     assert r.type_weights == (1.0, 1.0, 3.0)
     assert apply_overrides(RECOGNITION["cpu"], None) is RECOGNITION["cpu"]

@@ -3,7 +3,7 @@ the side-effect outcome from the other."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import asdict
 
 import numpy as np
 import pytest
@@ -16,8 +16,9 @@ from afford.prediction.paired import SIDE_FILE, PairedNet
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 from afford.training.checkpoint import CheckpointError, save_checkpoint
+from afford.training.fields import with_fields
 
-BY_EFFECT = replace(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
+BY_EFFECT = with_fields(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
 TURN = Affordance("turn", (-0.05, 0.22, 0.025), 0.0, False, 90)
 GRASP = Affordance("grasp", (0.05, 0.3, 0.0425), 0.0, True)
 
@@ -71,7 +72,7 @@ def test_nets_that_cannot_pair_say_why(tmp_path):
     with pytest.raises(ValueError, match="hypotheses_by=effect"):
         PairedNet(_net(0), _net(1, PRESETS["tiny"]))
     with pytest.raises(ValueError, match="variance"):
-        PairedNet(_net(0), _net(1, replace(BY_EFFECT, variance=True)))
+        PairedNet(_net(0), _net(1, with_fields(BY_EFFECT, variance=True)))
     main = tmp_path / "prediction.safetensors"
     save_checkpoint(main, _net(0), "prediction", asdict(BY_EFFECT), 0)
     assert isinstance(load_net(main)[0], PredictionNet)  # alone: no side-effect net beside it

@@ -18,6 +18,7 @@ from afford.prediction.train import change_mask, sequence_loss
 from afford.sim import camera
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
+from afford.training.fields import with_fields
 from afford.training.signsgd import SignSGD
 
 TINY = PRESETS["tiny"]
@@ -106,9 +107,8 @@ def test_affordance_pixel_reads_the_projected_pixel():
 
 
 def test_no_pixel_input_zeroes_it():
-    from dataclasses import replace
 
-    net = PredictionNet(replace(TINY, pixel_input=False))
+    net = PredictionNet(with_fields(TINY, pixel_input=False))
     vec = net.action_vector(actions(Affordance("grasp", (0, 0.3, 0.02), 0, True)), torch.rand(1, 4, 128, 128))
     assert vec.shape == (1, 9) and torch.all(vec[0, 5:] == 0)
 
@@ -192,7 +192,7 @@ def test_shipped_weights_predict_a_grasp_at_the_object_and_in_the_gripper(scene)
     from afford.sim.scene import ObjectSpec
 
     net, config = load_net(WEIGHTS / PREDICTION_FILE)
-    assert config.architecture == "spatial"
+    assert config.model.architecture == "spatial"
     scene.reset([ObjectSpec.upright("cup", 0.10, 0.36), ObjectSpec.upright("support", -0.12, 0.30)])
     image = scene.observe()
     grasp = find(scene.affordances(), "grasp", (0.10, 0.36))

@@ -4,7 +4,7 @@ parsed by afford's own parser, and run stage by stage by `afford weights make`."
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, fields, replace
+from dataclasses import asdict, replace
 from importlib import import_module
 from pathlib import Path
 
@@ -26,6 +26,7 @@ from afford.recipes import (
     stages_for,
 )
 from afford.shipped import WEIGHTS
+from afford.training.fields import flat, from_dict, with_fields
 from afford.training.overrides import apply_overrides, preset_config
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,17 +78,15 @@ def trained_config(stage: Stage):
 
 
 def differences(config, stored: dict) -> dict:
-    """Training fields where a config and a file's stored config differ; a field the file does not
-    record (added to afford after it was trained) must be at its default, which is what ran."""
-    out = {}
-    for f in fields(config):
-        if f.name in FITTED:
-            continue
-        mine = json.loads(json.dumps(getattr(config, f.name)))
-        theirs = stored.get(f.name, json.loads(json.dumps(getattr(type(config)(), f.name))))
-        if mine != theirs:
-            out[f.name] = (mine, theirs)
-    return out
+    """Training fields where a config and a file's stored config (flat or grouped) differ; a
+    field the file does not record (added to afford after it was trained) must be at its
+    default, which is what ran."""
+    theirs = flat(from_dict(type(config), stored))
+    return {
+        name: (mine, theirs[name])
+        for name, mine in flat(config).items()
+        if name.rpartition(".")[2] not in FITTED and json.dumps(mine) != json.dumps(theirs[name])
+    }
 
 
 # ------------------------------------------------------------------ the registry
@@ -150,11 +149,11 @@ def test_the_cpu_two_outcome_preset_is_the_shipped_prediction_nets_config():
     _, meta = read_checkpoint(WEIGHTS / "prediction.safetensors", "prediction")
     assert differences(PRESETS["cpu-two-outcome"], meta["config"]) == {}
     assert differences(PRESETS["cpu"], meta["config"]).keys() == {
-        "hypotheses",
-        "hypotheses_by",
-        "fork",
-        "effect_fraction",
-        "grad_clip",
+        "outcomes.hypotheses",
+        "outcomes.hypotheses_by",
+        "outcomes.fork",
+        "sampling.effect_fraction",
+        "training.grad_clip",
     }
 
 
@@ -197,7 +196,7 @@ def test_weights_export_writes_the_run_with_its_files_recipe(tmp_path, capsys):
     from afford.prediction.model import PredictionNet
     from afford.training.checkpoint import save_checkpoint
 
-    config = replace(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
+    config = with_fields(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
     save_checkpoint(
         tmp_path / "run" / "best.safetensors", PredictionNet(config), "prediction", asdict(config), 1
     )
@@ -207,7 +206,7 @@ def test_weights_export_writes_the_run_with_its_files_recipe(tmp_path, capsys):
     out = tmp_path / "w" / "ensemble" / "prediction-2.safetensors"
     assert read_recipe(read_metadata(out)) == recipe_record(RECIPES["ensemble/prediction-2.safetensors"])
     _, loaded = load_net(out)
-    assert (loaded.choice_scale, loaded.choice_bias) == (0.5, -1.0)
+    assert (loaded.outcomes.choice_scale, loaded.outcomes.choice_bias) == (0.5, -1.0)
     assert main(["weights", "export", "nope.safetensors", "--run", str(tmp_path / "run"), "--out", "x"]) == 2
     assert "no recipe for 'nope.safetensors'" in capsys.readouterr().err
 

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 
 import numpy as np
 import pytest
 import torch
 
 from afford.cli.main import main
+from afford.training.fields import with_fields
 
 
 @pytest.mark.slow
@@ -161,28 +161,28 @@ def test_the_samplers_draw_the_asked_share_of_turn_and_side_effect_sequences(sma
     }
     for what, flagged in truth.items():
         assert flagged.any() and not flagged.all(), what  # the small dataset holds each kind
-        config = replace(PRESETS["tiny"], **{f"{what}_fraction": 0.7})
+        config = with_fields(PRESETS["tiny"], **{f"{what}_fraction": 0.7})
         weights = run_sampler([part], config, seed=0).weights.numpy()
         assert weights[flagged].sum() == pytest.approx(0.7) and weights.sum() == pytest.approx(1.0)
         # Two datasets joined: the share holds over the runs of both, in their order.
         joined = run_sampler([part, part], config, seed=0).weights.numpy()
         assert joined[np.concatenate([flagged, flagged])].sum() == pytest.approx(0.7)
         with pytest.raises(ValueError, match="between 0 and 1"):
-            run_sampler([part], replace(config, **{f"{what}_fraction": 1.5}), seed=0)
+            run_sampler([part], with_fields(config, **{f"{what}_fraction": 1.5}), seed=0)
     assert run_sampler([part], PRESETS["tiny"], seed=0) is None
     # Both asked: each kind gets at least its share, the rest comes from sequences with neither.
-    both = replace(PRESETS["tiny"], turn_fraction=0.3, effect_fraction=0.4)
+    both = with_fields(PRESETS["tiny"], turn_fraction=0.3, effect_fraction=0.4)
     weights = run_sampler([part], both, seed=0).weights.numpy()
     neither = ~(truth["turn"] | truth["effect"])
     assert weights.sum() == pytest.approx(1.0) and weights[neither].sum() == pytest.approx(0.3)
     assert weights[truth["turn"]].sum() >= 0.3 - 1e-9 and weights[truth["effect"]].sum() >= 0.4 - 1e-9
     # Places with a side effect on top of side effects: a floor within a floor.
-    nested = replace(PRESETS["tiny"], effect_fraction=0.5, place_effect_fraction=0.2)
+    nested = with_fields(PRESETS["tiny"], effect_fraction=0.5, place_effect_fraction=0.2)
     weights = run_sampler([part], nested, seed=0).weights.numpy()
     assert weights[~truth["effect"]].sum() == pytest.approx(0.3)
     assert weights[truth["place_effect"]].sum() >= 0.2 - 1e-9
     with pytest.raises(ValueError, match="sum below 1"):
-        run_sampler([part], replace(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
+        run_sampler([part], with_fields(PRESETS["tiny"], turn_fraction=0.5, effect_fraction=0.5), seed=0)
 
 
 def test_joined_datasets_give_every_run_of_each_and_their_own_streams(small_dataset):
@@ -259,7 +259,7 @@ def test_the_effect_loss_counts_only_the_effect_pixels():
     from afford.prediction.train import sequence_loss
 
     torch.manual_seed(0)
-    net = PredictionNet(replace(PRESETS["tiny"], loss_effect=1.0))
+    net = PredictionNet(with_fields(PRESETS["tiny"], loss_effect=1.0))
     images, actions = torch.rand(2, 2, 4, 128, 128), torch.zeros(2, 1, 7)
     steps = torch.tensor([1, 1])
     none = torch.zeros(2, 1, 128, 128, dtype=torch.bool)
@@ -296,7 +296,7 @@ def test_the_coarse_loss_is_part_of_the_training_loss():
 
     torch.manual_seed(0)
     net = PredictionNet(PRESETS["tiny"])
-    coarse = PredictionNet(replace(PRESETS["tiny"], loss_coarse=2.0))
+    coarse = PredictionNet(with_fields(PRESETS["tiny"], loss_coarse=2.0))
     coarse.load_state_dict(net.state_dict())
     images, actions, steps = torch.rand(2, 2, 4, 128, 128), torch.zeros(2, 1, 7), torch.tensor([1, 1])
     with torch.no_grad():

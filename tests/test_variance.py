@@ -1,7 +1,5 @@
 """A variance beside D's image (prediction/variance.py) and plans scored by it (paper V)."""
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 import torch
@@ -14,9 +12,10 @@ from afford.prediction.model import PredictionNet
 from afford.prediction.train import make_optimizer, sequence_loss
 from afford.prediction.variance import LOG_VARIANCE_RANGE, beta_nll, outcome_variance, total_variance
 from afford.training.checkpoint import load_model_state
+from afford.training.fields import with_fields
 
 TINY = PRESETS["tiny"]
-WITH_HEAD = replace(TINY, variance=True, loss_nll=1.0)
+WITH_HEAD = with_fields(TINY, variance=True, loss_nll=1.0)
 
 
 def test_beta_nll_gradient_by_hand():
@@ -79,7 +78,7 @@ def test_quadrature_gives_the_mean_and_variance_of_a_whole_image_goal_exactly():
 
 def test_the_head_gives_a_variance_per_pixel_in_range_and_alone_learns():
     torch.manual_seed(0)
-    config = replace(WITH_HEAD, trained="variance")
+    config = with_fields(WITH_HEAD, trained="variance")
     net = PredictionNet(config)
     images, rows = two_outcomes(2), place_rows(2)
     with torch.no_grad():
@@ -111,12 +110,12 @@ def test_a_checkpoint_without_the_head_loads_with_it_and_draws_the_same():
     with torch.no_grad():
         assert torch.equal(old.rollout(images[:, 0], rows), net.rollout(images[:, 0], rows))
     with pytest.raises(ValueError, match="spatial"):
-        PredictionNet(replace(PRESETS["tiny-dense"], variance=True))
+        PredictionNet(with_fields(PRESETS["tiny-dense"], variance=True))
 
 
 def test_two_outcomes_each_have_a_variance():
     torch.manual_seed(0)
-    net = PredictionNet(replace(WITH_HEAD, hypotheses=2, hypotheses_by="effect", fork="latent"))
+    net = PredictionNet(with_fields(WITH_HEAD, hypotheses=2, hypotheses_by="effect", fork="latent"))
     images, rows = two_outcomes(2), place_rows(2)
     latent, memory = net.encode(images[:, 0])
     outcomes = net.step_outcomes(latent, memory, images[:, 0], rows[:, 0])

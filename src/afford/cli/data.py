@@ -202,7 +202,7 @@ def cmd_data_predict(args) -> int:
     data = Dataset(args.dir)
     checkpoint = Path(args.prediction) if args.prediction else WEIGHTS / PREDICTION_FILE
     net, config = load_net(checkpoint)
-    torch.set_num_threads(config.threads)
+    torch.set_num_threads(config.training.threads)
     n = predict_states(
         net, data, args.split, args.out, args.sequences, progress=not args.json, source=str(checkpoint)
     )

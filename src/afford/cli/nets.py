@@ -149,7 +149,7 @@ def cmd_futures(args) -> int:
 
     nets = load_nets(args.weights)
     recognizer, net = nets.recognizer, nets.predictor
-    torch.set_num_threads(net.config.threads)
+    torch.set_num_threads(net.config.training.threads)
     data = Dataset(args.data)
     folder = Path(args.out)
     predict = net_predictor(net)
@@ -247,8 +247,8 @@ def add_parsers(sub) -> None:
             "--set",
             action="append",
             metavar="KEY=VALUE",
-            help="change one field of the preset's config (repeatable), e.g. --set lr=3e-4; "
-            "a tuple as a comma list",
+            help="change one field of the preset's config (repeatable), e.g. --set lr=3e-4, or by "
+            "its path in a grouped config, --set training.lr=3e-4; a tuple as a comma list",
         )
         p.add_argument(
             "--init",

@@ -142,7 +142,7 @@ def _object_masks(data: PredictionData, seq, start: int, stop: int) -> np.ndarra
     return masks
 
 
-# Where `PredictionConfig.loss_effect` weighs the squared error again: the pixels of the side
+# Where `PredictionConfig.loss.effect` weighs the squared error again: the pixels of the side
 # effects that happened, or every object's pixels, so that drawing an effect that did not
 # happen costs as much as missing one that did.
 REGIONS = {"effects": _effect_masks, "objects": _object_masks}

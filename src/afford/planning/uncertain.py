@@ -101,7 +101,7 @@ class EnsembleModel(WorldModel):
     def __init__(
         self, image: np.ndarray, recognizer: Recognizer, members: tuple[PredictionNet, ...], risk: float
     ):
-        if not members or (len(members) < 2 and not members[0].config.variance):
+        if not members or (len(members) < 2 and not members[0].config.model.variance):
             raise EnsembleError(
                 f"an ensemble needs at least 2 prediction nets, or one with a variance head, not "
                 f"{len(members)}: put the members in the weights folder's ensemble/ (`afford export "
@@ -128,7 +128,7 @@ class EnsembleModel(WorldModel):
     @torch.no_grad()
     def predict(self, parents: list[Node], actions: list[Affordance]):
         rows = torch.from_numpy(np.stack([encode_affordance(a) for a in actions]))
-        heads = any(m.config.variance for m in self.members)
+        heads = any(m.config.model.variance for m in self.members)
         out_latent, out_memory, out_images, out_variances = [], [], [], []
         for k, member in enumerate(self.members):
             latent = torch.stack([p.state.latent[k] for p in parents])
@@ -193,7 +193,7 @@ class EnsembleBranchingModel(WorldModel):
     def __init__(
         self, image: np.ndarray, recognizer: Recognizer, members: tuple[PredictionNet, ...], risk: float
     ):
-        if not members or (len(members) < 2 and members[0].config.hypotheses < 2):
+        if not members or (len(members) < 2 and members[0].config.outcomes.hypotheses < 2):
             raise EnsembleError(
                 "an ensemble that keeps outcomes needs at least 2 prediction nets, or one that "
                 "foresees two outcomes per step: put the members in the weights folder's ensemble/ "

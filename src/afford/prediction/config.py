@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from typing import ClassVar
 
 from afford.sim.affordances import TYPES
 from afford.sim.camera import SIZE
+from afford.training.fields import with_fields
 
 CHANGED = 0.02  # ours: a ground-truth pixel changed when a channel moved by more than this
 
 
 @dataclass(frozen=True)
-class PredictionConfig:
+class ModelConfig:
+    """The net's shape: E, P^a per affordance type, D (paper II.C)."""
+
     # "dense": the paper's vector latent (dense.py); "spatial": a latent grid (spatial.py).
     # The default is the paper's, so checkpoints written before the spatial net still load.
     architecture: str = "dense"
@@ -40,81 +44,42 @@ class PredictionConfig:
     # Action vector normalisation: (position - centre) / scale, so its values are order 1.
     position_centre: tuple[float, float, float] = (0.0, 0.27, 0.05)
     position_scale: tuple[float, float, float] = (0.2, 0.2, 0.1)
-    # Training. The loss per step (train.sequence_loss): mse * squared error + l1 * absolute
-    # error (both summed over channels, mean over pixels) + mask * squared error of eq. (3)'s
-    # mask against where the truth changed + values * D's new values' absolute error there.
-    loss_mse: float = 1.0
-    loss_l1: float = 0.0
-    loss_mask: float = 0.0
-    loss_values: float = 0.0
-    # The mask and values terms' "changed": from the true previous state (False), or from the
-    # step's own input, the previous prediction, so D learns to repair earlier errors (True).
-    repair: bool = False
-    optimizer: str = "adam"  # "signsgd" as the paper, or "adam"
-    lr: float = 1e-3
-    batch_size: int = 32
-    steps: int = 3000
-    eval_every: int = 250
-    log_every: int = 25
-    schedule: str = "plateau"  # "plateau": the paper's halving; "cosine": warm-up, cosine decay
-    patience: int = 5  # plateau: halve the lr after this many evaluations without improvement (paper)
-    warmup: int = 200  # cosine: batches of linear warm-up
-    max_steps: int = 4  # executions per training run (1-4, random start)
-    shift_px: int = 3
-    mirror: bool = True
-    angle_flip: bool = True
-    position_noise: float = 0.002
-    angle_noise: float = 1.0
-    # Gradients rescaled to at most this norm before each step (0: off; the shipped prediction net
-    # was trained with 1.0). A from-scratch two-outcome
-    # run (fork=latent) met one batch of loss 1.3e6 at step 300 (the choice head's cross-entropy
-    # on an unbounded dc): the gradient filled Adam's second moments, and the net learned at a
-    # fraction of its rate for the rest of the run (val error 3x the one-outcome run's).
-    grad_clip: float = 0.0
-    threads: int = 2
-    bf16: bool = False  # bfloat16 autocast in training (AVX-512 BF16 CPUs); measured in benchmarks/
-    loader_workers: int = 1  # background processes building batches (0: in the training thread)
-    # The run's random stream (data order, augmentation): members of an ensemble differ by it.
-    seed: int = 0
-    # Train on a resample, with replacement, of the training sequences drawn from `seed`: the
-    # bootstrap that makes an ensemble's members disagree where the data is thin.
-    bootstrap: bool = False
-    # The share of training runs drawn from sequences with a turn (0: as the data comes, about
-    # a quarter with turns): more turn examples for P^turn, for continuous turn angles (paper V).
-    turn_fraction: float = 0.0
-    # The share of training runs drawn from sequences with a side effect (data/effects.py; 0: as
-    # the data comes, about 4 in 10 sequences hold one somewhere). With turn_fraction too, each
-    # share is a floor (a sequence may hold both) and the rest holds neither.
-    effect_fraction: float = 0.0
-    # The share drawn from sequences where a place had a side effect (the block tips, the object
-    # placed falls or slides): a floor beside the two above. Places are the side effects the net
-    # foresees worst, and its head is underconfident where a place at a block's end tips it
-    # every time (benchmarks/place_outcomes.py); one place in six has one, so few runs show it.
-    place_effect_fraction: float = 0.0
-    # Weight of the squared error on the pixels where a step had a side effect, as a mean over
-    # those pixels (train.sequence_loss); 0: off, and the batches carry no effect masks.
-    loss_effect: float = 0.0
-    # Weight of the absolute error between prediction and truth each averaged over blocks of
-    # coarse_px x coarse_px pixels (train.coarse_error; 0: off). Pixel losses charge an object
-    # drawn a few pixels from where it lands twice (drawn where it is not, missing where it is)
-    # and one not drawn at all once, so a net unsure of a landing to within the object's size
-    # draws none (foresight of the landing disks: 0.01 on the shipped net, `afford eval
-    # prediction`'s parts). Over blocks, an object drawn within its block costs nothing and one
-    # missing costs as before.
-    loss_coarse: float = 0.0
-    coarse_px: int = 8  # the latent grid's cell at 128 px
-    # Where that squared error is taken (data/torch_data.REGIONS): "effects", the pixels of
-    # the side effects that happened (weighs only one way: the net learns to draw effects where
-    # none follow); "objects", every object's pixels in every step, effect or not.
-    effect_region: str = "effects"
-    # Outcomes D draws per step (spatial only): 1, one image, as the paper; K > 1, K candidate
-    # images and a head that scores them, trained winner-takes-all: the candidate nearest the
-    # truth takes the loss and is carried to the next step, the head learns which one won.
-    # One image can only hedge between "the ball stays" and "the ball falls" (a blur that
-    # matches neither); K can draw both, sharp, and say which is likely.
+    # A per-pixel variance beside D's image (spatial only; prediction/variance.py, paper V):
+    # D's last features also give log sigma^2 of each pixel of the state it predicts, trained by
+    # beta-NLL against the truth (`loss.nll`, `loss.nll_beta`) with the image itself held fixed
+    # in that term, so the mean image learns exactly as without it. `variance_scale`: the factor
+    # fitted on val that makes the variance match the squared error (1: as trained).
+    variance: bool = False
+    variance_scale: float = 1.0
+
+    @property
+    def latent_size(self) -> int:
+        return self.image_size // 2 ** len(self.encoder_channels)
+
+    @property
+    def conv_size(self) -> int:
+        return self.image_size // 4
+
+    @property
+    def conv_features(self) -> int:
+        return self.conv_channels * self.conv_size**2
+
+    @property
+    def action_size(self) -> int:
+        # x, y, z, angle (fraction of a turn), turn parameter (+-1, 0), the pixel's RGBD
+        return 5 + self.channels
+
+
+@dataclass(frozen=True)
+class OutcomesConfig:
+    """How many outcomes D draws per step, where they part, and the head that says which follows."""
+
+    # 1: one image, as the paper; K > 1 (spatial only): K candidate images and a head that
+    # scores them, trained winner-takes-all: the candidate nearest the truth takes the loss and
+    # is carried to the next step, the head learns which one won. One image can only hedge
+    # between "the ball stays" and "the ball falls" (a blur that matches neither); K can draw
+    # both, sharp, and say which is likely.
     hypotheses: int = 1
-    loss_choice: float = 0.1  # the choice head's cross-entropy against the winner
-    loss_others: float = 0.05  # every candidate's absolute error, so that none stops learning
     # Which candidate takes each step's loss: "winner", the one nearest the truth; "effect"
     # (K = 2), chosen by the step's label (data/effects.py): the first draws canonical steps,
     # the second steps with a side effect, and the head learns how likely a side effect is.
@@ -140,8 +105,8 @@ class PredictionConfig:
     # The head's side-effect logit (the second outcome's minus the first's) is read as
     # sigmoid(choice_scale * logit + choice_bias): Platt scaling fitted on val
     # (prediction/calibration.py). Training draws side-effect runs more often than they come
-    # (effect_fraction), so the raw head overstates how often one follows; the planner that
-    # weighs outcomes by their probability (planning/branches.py) needs them as they come.
+    # (sampling.effect_fraction), so the raw head overstates how often one follows; the planner
+    # that weighs outcomes by their probability (planning/branches.py) needs them as they come.
     choice_scale: float = 1.0
     choice_bias: float = 0.0
     # The same fitted per action type (in sim.affordances.TYPES order; empty: the one above for
@@ -149,6 +114,97 @@ class PredictionConfig:
     # left the head underconfident where places tip the block (benchmarks/place_outcomes.py).
     choice_scales: tuple[float, ...] = ()
     choice_biases: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class LossConfig:
+    """The loss per step (train.sequence_loss), each term's weight (0: off)."""
+
+    # The weights' flat names (`--set loss_l1=1`): "l1" alone does not say it is a loss's.
+    flat_names: ClassVar[dict[str, str]] = {
+        k: f"loss_{k}" for k in ("mse", "l1", "mask", "values", "effect", "coarse", "choice", "others", "nll")
+    }
+
+    # mse * squared error + l1 * absolute error (both summed over channels, mean over pixels)
+    # + mask * squared error of eq. (3)'s mask against where the truth changed + values * D's
+    # new values' absolute error there.
+    mse: float = 1.0
+    l1: float = 0.0
+    mask: float = 0.0
+    values: float = 0.0
+    # The mask and values terms' "changed": from the true previous state (False), or from the
+    # step's own input, the previous prediction, so D learns to repair earlier errors (True).
+    repair: bool = False
+    # The squared error on the pixels where a step had a side effect, as a mean over those
+    # pixels; 0: off, and the batches carry no effect masks.
+    effect: float = 0.0
+    # Where that squared error is taken (data/torch_data.REGIONS): "effects", the pixels of
+    # the side effects that happened (weighs only one way: the net learns to draw effects where
+    # none follow); "objects", every object's pixels in every step, effect or not.
+    effect_region: str = "effects"
+    # The absolute error between prediction and truth each averaged over blocks of
+    # coarse_px x coarse_px pixels (train.coarse_error). Pixel losses charge an object
+    # drawn a few pixels from where it lands twice (drawn where it is not, missing where it is)
+    # and one not drawn at all once, so a net unsure of a landing to within the object's size
+    # draws none (foresight of the landing disks: 0.01 on the shipped net, `afford eval
+    # prediction`'s parts). Over blocks, an object drawn within its block costs nothing and one
+    # missing costs as before.
+    coarse: float = 0.0
+    coarse_px: int = 8  # the latent grid's cell at 128 px
+    choice: float = 0.1  # K > 1: the choice head's cross-entropy against the winner
+    others: float = 0.05  # K > 1: every candidate's absolute error, so that none stops learning
+    nll: float = 0.0  # model.variance: the beta-NLL of the per-pixel variance
+    nll_beta: float = 0.5
+
+
+@dataclass(frozen=True)
+class SamplingConfig:
+    """Which training runs are drawn, and how each is augmented."""
+
+    max_steps: int = 4  # executions per training run (1-4, random start)
+    shift_px: int = 3
+    mirror: bool = True
+    angle_flip: bool = True
+    position_noise: float = 0.002
+    angle_noise: float = 1.0
+    # The run's random stream (data order, augmentation): members of an ensemble differ by it.
+    seed: int = 0
+    # Train on a resample, with replacement, of the training sequences drawn from `seed`: the
+    # bootstrap that makes an ensemble's members disagree where the data is thin.
+    bootstrap: bool = False
+    # The share of training runs drawn from sequences with a turn (0: as the data comes, about
+    # a quarter with turns): more turn examples for P^turn, for continuous turn angles (paper V).
+    turn_fraction: float = 0.0
+    # The share of training runs drawn from sequences with a side effect (data/effects.py; 0: as
+    # the data comes, about 4 in 10 sequences hold one somewhere). With turn_fraction too, each
+    # share is a floor (a sequence may hold both) and the rest holds neither.
+    effect_fraction: float = 0.0
+    # The share drawn from sequences where a place had a side effect (the block tips, the object
+    # placed falls or slides): a floor beside the two above. Places are the side effects the net
+    # foresees worst, and its head is underconfident where a place at a block's end tips it
+    # every time (benchmarks/place_outcomes.py); one place in six has one, so few runs show it.
+    place_effect_fraction: float = 0.0
+
+
+@dataclass(frozen=True)
+class TrainingConfig:
+    """The optimiser, its schedule, and the machine it runs on."""
+
+    optimizer: str = "adam"  # "signsgd" as the paper, or "adam"
+    lr: float = 1e-3
+    batch_size: int = 32
+    steps: int = 3000
+    eval_every: int = 250
+    log_every: int = 25
+    schedule: str = "plateau"  # "plateau": the paper's halving; "cosine": warm-up, cosine decay
+    patience: int = 5  # plateau: halve the lr after this many evaluations without improvement (paper)
+    warmup: int = 200  # cosine: batches of linear warm-up
+    # Gradients rescaled to at most this norm before each step (0: off; the shipped prediction net
+    # was trained with 1.0). A from-scratch two-outcome
+    # run (fork=latent) met one batch of loss 1.3e6 at step 300 (the choice head's cross-entropy
+    # on an unbounded dc): the gradient filled Adam's second moments, and the net learned at a
+    # fraction of its rate for the rest of the run (val error 3x the one-outcome run's).
+    grad_clip: float = 0.0
     # What training changes (train.TRAINED): "all"; "outcomes", only the other outcomes' own
     # parts (fork=latent's P^a ends, the choice head), so that fine-tuning a one-outcome net into
     # two keeps its first outcome exactly: what it foresaw, and the plans it found, stay;
@@ -157,32 +213,22 @@ class PredictionConfig:
     # side-effect outcome redrawn); "variance", only the variance head (a net that learns where
     # it is unsure, its images unchanged).
     trained: str = "all"
-    # A per-pixel variance beside D's image (spatial only; prediction/variance.py, paper V):
-    # D's last features also give log sigma^2 of each pixel of the state it predicts, trained by
-    # beta-NLL against the truth (`loss_nll`, `nll_beta`) with the image itself held fixed in that
-    # term, so the mean image learns exactly as without it. `variance_scale`: the factor fitted on
-    # val that makes the variance match the squared error (1: as trained).
-    variance: bool = False
-    loss_nll: float = 0.0
-    nll_beta: float = 0.5
-    variance_scale: float = 1.0
+    threads: int = 2
+    bf16: bool = False  # bfloat16 autocast in training (AVX-512 BF16 CPUs); measured in benchmarks/
+    loader_workers: int = 1  # background processes building batches (0: in the training thread)
 
-    @property
-    def latent_size(self) -> int:
-        return self.image_size // 2 ** len(self.encoder_channels)
 
-    @property
-    def conv_size(self) -> int:
-        return self.image_size // 4
+@dataclass(frozen=True)
+class PredictionConfig:
+    """The EM*D net's config: its shape, outcomes, loss, training runs and schedule, each a
+        record. `training.fields` gives each field a flat name too (`lr`, `hypotheses`, `loss_l1`), as
+    `--set` and configs stored as one flat dict (the shipped files) write them."""
 
-    @property
-    def conv_features(self) -> int:
-        return self.conv_channels * self.conv_size**2
-
-    @property
-    def action_size(self) -> int:
-        # x, y, z, angle (fraction of a turn), turn parameter (+-1, 0), the pixel's RGBD
-        return 5 + self.channels
+    model: ModelConfig = ModelConfig()
+    outcomes: OutcomesConfig = OutcomesConfig()
+    loss: LossConfig = LossConfig()
+    sampling: SamplingConfig = SamplingConfig()
+    training: TrainingConfig = TrainingConfig()
 
 
 # Tests' nets: a few batches of 4, built in the training thread.
@@ -190,8 +236,14 @@ _TINY_SCHEDULE = {"batch_size": 4, "loader_workers": 0, "steps": 20, "eval_every
 
 # The spatial latent: it learns in thousands of batches, not a million. Adam, because SignSGD at
 # the paper's rate needs the paper's million batches.
-_CPU = PredictionConfig(
-    architecture="spatial", loss_l1=1.0, loss_mask=0.1, loss_values=0.1, schedule="cosine", steps=4200
+_CPU = with_fields(
+    PredictionConfig(),
+    architecture="spatial",
+    loss_l1=1.0,
+    loss_mask=0.1,
+    loss_values=0.1,
+    schedule="cosine",
+    steps=4200,
 )
 
 PRESETS = {
@@ -199,13 +251,14 @@ PRESETS = {
     # The shipped prediction net's recipe (afford/recipes/; with --more-data data/effects): two
     # outcomes forked in the latent, the second drawing side effects, half the runs holding one,
     # and the gradient clipped, which a two-outcome run from scratch needs.
-    "cpu-two-outcome": replace(
+    "cpu-two-outcome": with_fields(
         _CPU, hypotheses=2, hypotheses_by="effect", fork="latent", effect_fraction=0.5, grad_clip=1.0
     ),
     # The dense net at CPU size (the shipped net before the spatial one), for comparison.
     "dense-cpu": PredictionConfig(),
     # The paper's sizes (II.C; the authors' public configuration for the P modules) and schedule.
-    "paper": PredictionConfig(
+    "paper": with_fields(
+        PredictionConfig(),
         dense=(4096,),
         latent=128,
         optimizer="signsgd",
@@ -214,7 +267,8 @@ PRESETS = {
         eval_every=10_000,
         log_every=500,
     ),
-    "tiny": PredictionConfig(
+    "tiny": with_fields(
+        PredictionConfig(),
         architecture="spatial",
         loss_l1=1.0,
         loss_mask=0.1,
@@ -228,7 +282,8 @@ PRESETS = {
         full_channels=8,
         **_TINY_SCHEDULE,
     ),
-    "tiny-dense": PredictionConfig(
+    "tiny-dense": with_fields(
+        PredictionConfig(),
         conv_channels=2,
         dense=(16,),
         latent=8,

@@ -23,11 +23,11 @@ MASK_BIAS = 0.15
 class DenseEncoder(nn.Module):
     def __init__(self, c: PredictionConfig):
         super().__init__()
-        k = c.conv_channels
+        k = c.model.conv_channels
         self.convs = nn.Sequential(
-            nn.Conv2d(c.channels, k, 3, 2, 1), nn.Tanh(), nn.Conv2d(k, k, 3, 2, 1), nn.Tanh()
+            nn.Conv2d(c.model.channels, k, 3, 2, 1), nn.Tanh(), nn.Conv2d(k, k, 3, 2, 1), nn.Tanh()
         )
-        sizes = [c.conv_features, *c.dense, c.latent]
+        sizes = [c.model.conv_features, *c.model.dense, c.model.latent]
         layers: list[nn.Module] = []
         for i, (a, b) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
             layers.append(nn.Linear(a, b))
@@ -51,20 +51,20 @@ class DenseDecoder(nn.Module):
 
     def __init__(self, c: PredictionConfig):
         super().__init__()
-        sizes = [c.latent, *reversed(c.dense), c.conv_features]
+        sizes = [c.model.latent, *reversed(c.model.dense), c.model.conv_features]
         layers: list[nn.Module] = []
         for a, b in zip(sizes[:-1], sizes[1:], strict=True):
             layers += [nn.Linear(a, b), nn.Tanh()]
         self.dense = nn.Sequential(*layers)
-        self.shape = (c.conv_channels, c.conv_size, c.conv_size)
-        k = c.conv_channels
+        self.shape = (c.model.conv_channels, c.model.conv_size, c.model.conv_size)
+        k = c.model.conv_channels
         # Nearest-neighbour 2x upscaling between the up-convolutions (paper, after [25]).
         self.up = nn.Sequential(
             nn.Upsample(scale_factor=2, mode="nearest"),
             nn.Conv2d(k, k, 3, 1, 1),
             nn.Tanh(),
             nn.Upsample(scale_factor=2, mode="nearest"),
-            nn.Conv2d(k, c.channels + 1, 3, 1, 1),
+            nn.Conv2d(k, c.model.channels + 1, 3, 1, 1),
         )
         with torch.no_grad():
             self.up[-1].bias[-1] = MASK_BIAS
@@ -87,9 +87,11 @@ class DenseP(nn.Module):
 
     def __init__(self, c: PredictionConfig):
         super().__init__()
-        width = 2 * c.latent
-        self.latent = c.latent
-        self.layers = nn.ModuleList(nn.Linear(width + c.action_size, width) for _ in range(c.p_layers))
+        width = 2 * c.model.latent
+        self.latent = c.model.latent
+        self.layers = nn.ModuleList(
+            nn.Linear(width + c.model.action_size, width) for _ in range(c.model.p_layers)
+        )
 
     def forward(self, latent: torch.Tensor, memory: torch.Tensor, vector: torch.Tensor, pixel: torch.Tensor):
         h = torch.cat([latent, memory], -1)

@@ -38,9 +38,9 @@ def member_paths(folder: str | Path) -> list[Path]:
 
 def check_members(nets: list[PredictionNet]) -> None:
     """Members must agree on what they predict from: the same architecture and image size."""
-    first = nets[0].config
+    first = nets[0].config.model
     for k, net in enumerate(nets[1:], start=1):
-        c = net.config
+        c = net.config.model
         if (c.architecture, c.image_size, c.channels, c.types) != (
             first.architecture,
             first.image_size,
@@ -167,7 +167,7 @@ def member_variance(net: PredictionNet, rolled: Rollout, actions: torch.Tensor) 
     (`variance.outcome_variance`)."""
     states, candidates, logits, log_var = rolled.states, rolled.candidates, rolled.logits, rolled.log_variance
     variance = torch.zeros_like(states[:, :, 0]) if log_var is None else net.variance(log_var)[:, :, 0]
-    if candidates is not None and net.config.hypotheses_by == "effect":
+    if candidates is not None and net.config.outcomes.hypotheses_by == "effect":
         b, length = logits.shape[:2]
         probability = net.probabilities(logits.flatten(0, 1), actions.flatten(0, 1)).view(b, length, -1)
         variance = variance + outcome_variance(candidates.float(), probability, states.float())
@@ -184,7 +184,7 @@ def calibrate_variance(members, data, limit: int | None = VARIANCE_RUNS) -> dict
     val, test = (calibrate(members, data, split, limit) for split in ("val", "test"))
     fitted = val.fitted_scale()
     return {
-        "variance_scale": round(members[0].config.variance_scale * fitted, 6),
+        "variance_scale": round(members[0].config.model.variance_scale * fitted, 6),
         "fitted_on": "val",
         "val": {"states": len(val.variance), "ratio": round(val.ratio(), 4)},
         "test": {

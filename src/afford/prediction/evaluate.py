@@ -132,27 +132,27 @@ def evaluate(
     """Table 2 for the net in `checkpoint`, and the copy baseline, on test and train; with a
     recogniser, also recognition on the predicted test states (`futures.py`)."""
     net, config = load_net(checkpoint)
-    torch.set_num_threads(config.threads)
+    torch.set_num_threads(config.training.threads)
     data = Dataset(data_dir)
     result = {
         "checkpoint": str(checkpoint),
-        "architecture": config.architecture,
-        "pixel_input": config.pixel_input,
+        "architecture": config.model.architecture,
+        "pixel_input": config.model.pixel_input,
     }
     for split, limit in (("test", None), ("train", TRAIN_SEQUENCES)):
         result[split] = table(errors(net, data, split, limit)[0])
         result[f"{split}_copy"] = table(errors(None, data, split, limit)[0])
     result["foresight"] = foresight.measure(net.rollout, data, "test").as_dict()
-    if config.hypotheses > 1:  # each outcome forced: what the head's pick gains or loses
+    if config.outcomes.hypotheses > 1:  # each outcome forced: what the head's pick gains or loses
         result["foresight_forced"] = [
             foresight.measure(partial(forced, net, k), data, "test").as_dict()
-            for k in range(config.hypotheses)
+            for k in range(config.outcomes.hypotheses)
         ]
-    if config.hypotheses == 2 and config.hypotheses_by == "effect":
+    if config.outcomes.hypotheses == 2 and config.outcomes.hypotheses_by == "effect":
         from afford.prediction.calibration import calibrate
 
         result["choice_head"] = calibrate(net, data)
-    if config.variance:
+    if config.model.variance:
         from afford.prediction.ensemble import calibrate_variance
 
         result["variance"] = calibrate_variance([net], data)

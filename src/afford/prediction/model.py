@@ -7,7 +7,7 @@ mask, applied to the current image by eq. (3). The action vector's last values a
 of the affordance's pixel, read from the current image: the real one at the first step, the
 predicted one after.
 
-Two architectures fill in E, P^a and D (`config.architecture`): "dense", the paper's vector
+Two architectures fill in E, P^a and D (`config.model.architecture`): "dense", the paper's vector
 latent (`dense.py`, the `paper` preset), and "spatial", a latent grid that learns on a CPU
 (`spatial.py`, the `cpu` preset). This module holds what they share: routing by type, the
 action vector, eq. (2) and (3); the rollout over a sequence of actions is rollout.py's.
@@ -47,7 +47,7 @@ def affordance_pixel(images: torch.Tensor, positions: torch.Tensor) -> torch.Ten
 
 @dataclass
 class Hypotheses:
-    """A step's K candidate outcomes (config.hypotheses > 1): the images (B, K, C, H, W), the
+    """A step's K candidate outcomes (config.outcomes.hypotheses > 1): the images (B, K, C, H, W), the
     choice head's logits (B, K), and the one picked (B,): the winner, nearest the truth, in
     training; the most likely one otherwise."""
 
@@ -118,37 +118,39 @@ def winners(candidates: torch.Tensor, differences: torch.Tensor, image: torch.Te
     return ((errors * changed).sum((2, 3)) / changed.sum((2, 3))).argmin(1)
 
 
-# Where K candidate outcomes part (config.fork): in D's last layer, or in P^a's last block.
+# Where K candidate outcomes part (config.outcomes.fork): in D's last layer, or in P^a's last block.
 FORKS = ("decoder", "latent")
 
 
 class PredictionNet(Rollouts, nn.Module):
     def __init__(self, config: PredictionConfig):
         super().__init__()
-        if config.architecture not in ARCHITECTURES:
+        if config.model.architecture not in ARCHITECTURES:
             raise ValueError(
-                f"unknown prediction architecture {config.architecture!r}; "
+                f"unknown prediction architecture {config.model.architecture!r}; "
                 f"expected one of {sorted(ARCHITECTURES)}"
             )
-        if config.hypotheses < 1 or (config.hypotheses > 1 and config.architecture != "spatial"):
+        if config.outcomes.hypotheses < 1 or (
+            config.outcomes.hypotheses > 1 and config.model.architecture != "spatial"
+        ):
             raise ValueError("hypotheses: 1, or more with the spatial architecture")
-        if config.hypotheses_by not in ("winner", "effect"):
-            raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {config.hypotheses_by!r}")
-        if config.fork not in FORKS:
-            raise ValueError(f"fork: one of {', '.join(FORKS)}, not {config.fork!r}")
-        if config.variance and config.architecture != "spatial":
+        if config.outcomes.hypotheses_by not in ("winner", "effect"):
+            raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {config.outcomes.hypotheses_by!r}")
+        if config.outcomes.fork not in FORKS:
+            raise ValueError(f"fork: one of {', '.join(FORKS)}, not {config.outcomes.fork!r}")
+        if config.model.variance and config.model.architecture != "spatial":
             raise ValueError("variance: a variance head needs the spatial architecture")
-        if config.hypotheses_by == "effect" and config.hypotheses != 2:
+        if config.outcomes.hypotheses_by == "effect" and config.outcomes.hypotheses != 2:
             raise ValueError("hypotheses_by=effect needs hypotheses=2: a canonical and a side-effect outcome")
-        encoder, p_module, decoder = ARCHITECTURES[config.architecture]
+        encoder, p_module, decoder = ARCHITECTURES[config.model.architecture]
         self.config = config
         self.encoder = encoder(config)
         self.decoder = decoder(config)
-        self.modules_by_type = nn.ModuleList(p_module(config) for _ in config.types)
+        self.modules_by_type = nn.ModuleList(p_module(config) for _ in config.model.types)
         # Channels-last: the small convolutions over 128x128 images run ~3x faster on CPUs.
-        self.to(memory_format=torch.channels_last) if config.architecture == "dense" else None
-        self.register_buffer("pos_centre", torch.tensor(config.position_centre), persistent=False)
-        self.register_buffer("pos_scale", torch.tensor(config.position_scale), persistent=False)
+        self.to(memory_format=torch.channels_last) if config.model.architecture == "dense" else None
+        self.register_buffer("pos_centre", torch.tensor(config.model.position_centre), persistent=False)
+        self.register_buffer("pos_scale", torch.tensor(config.model.position_scale), persistent=False)
 
     def encode(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """E: (c_0, m_0) for images (B, C, H, W); the memory trace starts at zeros."""
@@ -158,7 +160,9 @@ class PredictionNet(Rollouts, nn.Module):
     def action_vector(self, rows: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
         """Affordance rows (B, 7: type, x, y, z, angle, symmetric, turn) -> the P input (B, 9)."""
         pos = rows[:, Col.POSITION]
-        pixel = affordance_pixel(image, pos) if self.config.pixel_input else image.new_zeros(len(rows), 4)
+        pixel = (
+            affordance_pixel(image, pos) if self.config.model.pixel_input else image.new_zeros(len(rows), 4)
+        )
         return torch.cat(
             [
                 (pos - self.pos_centre) / self.pos_scale,
@@ -190,9 +194,9 @@ class PredictionNet(Rollouts, nn.Module):
     def candidates(self, latent, memory, image, rows) -> Candidates:
         """K > 1: every candidate of one step (`Candidates`)."""
         dc, memory_out = self._p_step(latent, memory, image, rows)
-        b, k = len(image), self.config.hypotheses
+        b, k = len(image), self.config.outcomes.hypotheses
         repeated = image.repeat_interleave(k, 0)
-        forked = self.config.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
+        forked = self.config.outcomes.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
         difference, log_var = (
             self.decoder.decode(dc.flatten(0, 1), repeated) if forked else self.decoder.decode(dc, image)
         )
@@ -209,13 +213,13 @@ class PredictionNet(Rollouts, nn.Module):
 
     def variance(self, log_variance: torch.Tensor) -> torch.Tensor:
         """The variance per pixel from the head's log sigma^2, scaled by the calibration on val."""
-        return self.config.variance_scale * torch.exp(log_variance.float())
+        return self.config.model.variance_scale * torch.exp(log_variance.float())
 
     def step_outcomes(self, latent, memory, image, rows) -> Outcomes:
         """Every outcome of one step, each carried on as its own state, with the choice head's
         probability of each: what a planner that keeps the alternatives (planning/branches.py)
         grows. One outcome of probability 1 for a one-hypothesis net."""
-        if self.config.hypotheses == 1:
+        if self.config.outcomes.hypotheses == 1:
             step = self.step_hypotheses(latent, memory, image, rows)
             return Outcomes(
                 step.latent[:, None],
@@ -231,8 +235,8 @@ class PredictionNet(Rollouts, nn.Module):
     def outcome_states(self, latent, dc, memory_out) -> tuple[torch.Tensor, torch.Tensor]:
         """K > 1: every candidate's next latent and memory trace (B, K, ...) from `candidates`'
         dc and memory (one for all candidates unless forked in the latent)."""
-        k = self.config.hypotheses
-        if self.config.fork != "latent":  # one dc and memory for every candidate
+        k = self.config.outcomes.hypotheses
+        if self.config.outcomes.fork != "latent":  # one dc and memory for every candidate
             dc = dc[:, None].expand(-1, k, *dc.shape[1:])
             memory_out = memory_out[:, None].expand(-1, k, *memory_out.shape[1:])
         next_latent = self.encoder.renormalise((latent[:, None] + dc).flatten(0, 1))  # eq. (2)
@@ -243,13 +247,16 @@ class PredictionNet(Rollouts, nn.Module):
         side effect's logit read through the config's calibration (per action type where the
         config has one and the action rows (B, 7) are given); else their softmax."""
         logits = logits.float()
-        if self.config.hypotheses_by != "effect":
+        if self.config.outcomes.hypotheses_by != "effect":
             return logits.softmax(1)
         c = self.config
-        scale, bias = c.choice_scale, c.choice_bias
-        if c.choice_scales and rows is not None:
+        scale, bias = c.outcomes.choice_scale, c.outcomes.choice_bias
+        if c.outcomes.choice_scales and rows is not None:
             kind = rows[:, Col.TYPE].long().to(logits.device)
-            scale, bias = logits.new_tensor(c.choice_scales)[kind], logits.new_tensor(c.choice_biases)[kind]
+            scale, bias = (
+                logits.new_tensor(c.outcomes.choice_scales)[kind],
+                logits.new_tensor(c.outcomes.choice_biases)[kind],
+            )
         side = torch.sigmoid(scale * (logits[:, 1] - logits[:, 0]) + bias)
         return torch.stack([1 - side, side], 1)
 
@@ -266,7 +273,7 @@ class PredictionNet(Rollouts, nn.Module):
         one `label` (B,) names where it is given (training by effect labels), else the one
         nearest `truth` where that is given (training's winner-takes-all), else the one the
         choice head finds most likely."""
-        k = self.config.hypotheses
+        k = self.config.outcomes.hypotheses
         if k == 1:
             dc, memory_out = self._p_step(latent, memory, image, rows)
             difference, log_var = self.decoder.decode(dc, image)
@@ -277,7 +284,9 @@ class PredictionNet(Rollouts, nn.Module):
         picked = self.pick(c.images, c.differences, c.logits, image, rows, truth, label)
         at = torch.arange(len(image), device=image.device)
         dc, memory_out = c.dc, c.memory
-        if self.config.fork == "latent":  # the candidate carried on gives eq. (2) its dc, and its memory
+        if (
+            self.config.outcomes.fork == "latent"
+        ):  # the candidate carried on gives eq. (2) its dc, and its memory
             dc, memory_out = dc[at, picked], memory_out[at, picked]
         next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
         return Step(
@@ -296,8 +305,8 @@ class PredictionNet(Rollouts, nn.Module):
             return label.long()
         if truth is not None:
             return winners(candidates, differences, image, truth)
-        if self.config.hypotheses_by == "effect":
-            return (self.probabilities(logits, rows)[:, 1] > self.config.effect_threshold).long()
+        if self.config.outcomes.hypotheses_by == "effect":
+            return (self.probabilities(logits, rows)[:, 1] > self.config.outcomes.effect_threshold).long()
         return logits.argmax(1)
 
     def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
@@ -305,7 +314,7 @@ class PredictionNet(Rollouts, nn.Module):
         hypotheses): D's output repeated for each candidate, each a little apart so that
         winner-takes-all can tell them apart, and the choice head as initialised (uniform).
         Weights without a variance head for a net with one: the head as initialised."""
-        k = self.config.hypotheses
+        k = self.config.outcomes.hypotheses
         own = self.state_dict()
         state = dict(state)
         for name in own:  # a net given a variance head: the head as initialised, the rest as trained
@@ -343,9 +352,9 @@ class PredictionNet(Rollouts, nn.Module):
         P^a's last `fork_blocks` blocks in order, its `out` the P^a's output layer."""
         head, _, tail = name.partition(".forks.")
         part = tail.split(".", 1)[1]  # "block.conv1.weight", "before.0.conv1.weight" or "out.bias"
-        first = self.config.p_blocks - self.config.fork_blocks
+        first = self.config.model.p_blocks - self.config.outcomes.fork_blocks
         if part.startswith("block."):
-            return f"{head}.blocks.{self.config.p_blocks - 1}.{part[len('block.') :]}"
+            return f"{head}.blocks.{self.config.model.p_blocks - 1}.{part[len('block.') :]}"
         if part.startswith("before."):
             i, rest = part[len("before.") :].split(".", 1)
             return f"{head}.blocks.{first + int(i)}.{rest}"

@@ -47,17 +47,17 @@ class PairedNet(Rollouts, nn.Module):
         super().__init__()
         for name, net in (("main", main), ("side", side)):
             c = net.config
-            if c.hypotheses != 2 or c.hypotheses_by != "effect":
+            if c.outcomes.hypotheses != 2 or c.outcomes.hypotheses_by != "effect":
                 raise ValueError(f"a pair's {name} net needs hypotheses=2 and hypotheses_by=effect")
-            if c.variance:
+            if c.model.variance:
                 raise ValueError(f"a pair's {name} net has a variance head: a pair draws no variance")
-        if main.config.architecture != side.config.architecture:
+        if main.config.model.architecture != side.config.model.architecture:
             raise ValueError("a pair's nets need one architecture (their latents lie side by side)")
         self.main, self.side = main, side
         self.config = main.config  # the head's calibration and cut-off, threads: the main net's
         with torch.no_grad():
-            size = main.config.image_size
-            latent, memory = main.encode(torch.zeros(1, main.config.channels, size, size))
+            size = main.config.model.image_size
+            latent, memory = main.encode(torch.zeros(1, main.config.model.channels, size, size))
         self.split = (latent.shape[1], memory.shape[1])  # main's latent and memory channels
 
     def encode(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

@@ -36,7 +36,7 @@ from afford.sim.camera import SIZE
 # fully closed, or neither the mask nor the difference would get a gradient.
 MASK_BIAS = 0.1
 
-# The choice head's designs (config.choice_head): a linear map of each candidate's dc pooled over
+# The choice head's designs (config.outcomes.choice_head): a linear map of each candidate's dc pooled over
 # the grid; or convolutions over the grid, on the scene's latent beside each dc, then pooled.
 CHOICE_HEADS = ("pooled", "grid")
 
@@ -55,16 +55,16 @@ class SpatialEncoder(nn.Module):
 
     def __init__(self, c: PredictionConfig):
         super().__init__()
-        act = ACTIVATIONS[c.activation]
+        act = ACTIVATIONS[c.model.activation]
         layers: list[nn.Module] = []
-        width = c.channels
-        for w in c.encoder_channels:
+        width = c.model.channels
+        for w in c.model.encoder_channels:
             layers += [_conv(width, w, stride=2), act()]
             width = w
         # tanh keeps c in [-1, 1]: P's residual sums stay of order 1 (the dense net normalises).
-        layers += [_conv(width, c.latent_channels, k=1), nn.Tanh()]
+        layers += [_conv(width, c.model.latent_channels, k=1), nn.Tanh()]
         self.net = nn.Sequential(*layers)
-        self.memory_channels = c.memory_channels
+        self.memory_channels = c.model.memory_channels
 
     def forward(self, image: torch.Tensor) -> torch.Tensor:
         return self.net(image)
@@ -140,7 +140,7 @@ class Block(nn.Module):
 
 
 def _out_conv(c: PredictionConfig) -> nn.Conv2d:
-    out = _conv(c.p_channels, c.latent_channels + c.memory_channels)
+    out = _conv(c.model.p_channels, c.model.latent_channels + c.model.memory_channels)
     with torch.no_grad():  # dc starts small: eq. (2) first keeps c
         out.weight.mul_(0.1)
         out.bias.zero_()
@@ -154,8 +154,8 @@ class Fork(nn.Module):
 
     def __init__(self, c: PredictionConfig, act: type[nn.Module]):
         super().__init__()
-        self.before = nn.ModuleList(Block(c.p_channels, act) for _ in range(c.fork_blocks - 1))
-        self.block = Block(c.p_channels, act)
+        self.before = nn.ModuleList(Block(c.model.p_channels, act) for _ in range(c.outcomes.fork_blocks - 1))
+        self.block = Block(c.model.p_channels, act)
         self.out = _out_conv(c)
 
     def ends(self) -> list[nn.Module]:
@@ -178,19 +178,21 @@ class SpatialP(nn.Module):
 
     def __init__(self, c: PredictionConfig):
         super().__init__()
-        act = ACTIVATIONS[c.activation]
-        self.size, self.sigma = c.latent_size, c.blob_sigma
-        self.latent_channels = c.latent_channels
-        self.action_channels = ACTION_MAPS + c.channels
-        self.inp = _conv(c.latent_channels + c.memory_channels + self.action_channels, c.p_channels)
-        self.blocks = nn.ModuleList(Block(c.p_channels, act) for _ in range(c.p_blocks))
+        act = ACTIVATIONS[c.model.activation]
+        self.size, self.sigma = c.model.latent_size, c.model.blob_sigma
+        self.latent_channels = c.model.latent_channels
+        self.action_channels = ACTION_MAPS + c.model.channels
+        self.inp = _conv(
+            c.model.latent_channels + c.model.memory_channels + self.action_channels, c.model.p_channels
+        )
+        self.blocks = nn.ModuleList(Block(c.model.p_channels, act) for _ in range(c.model.p_blocks))
         self.act = act()
         self.out = _out_conv(c)
-        forked = c.hypotheses if c.fork == "latent" else 1
-        if forked > 1 and not 1 <= c.fork_blocks <= c.p_blocks:
+        forked = c.outcomes.hypotheses if c.outcomes.fork == "latent" else 1
+        if forked > 1 and not 1 <= c.outcomes.fork_blocks <= c.model.p_blocks:
             raise ValueError("fork=latent forks P's last fork_blocks blocks: 1 <= fork_blocks <= p_blocks")
         self.forks = nn.ModuleList(Fork(c, act) for _ in range(forked - 1))
-        self.shared = c.p_blocks - (c.fork_blocks if self.forks else 0)
+        self.shared = c.model.p_blocks - (c.outcomes.fork_blocks if self.forks else 0)
 
     def forward(self, latent: torch.Tensor, memory: torch.Tensor, vector: torch.Tensor, pixel: torch.Tensor):
         maps = action_maps(vector, pixel, self.size, self.sigma)
@@ -218,32 +220,38 @@ class SpatialDecoder(nn.Module):
 
     def __init__(self, c: PredictionConfig):
         super().__init__()
-        act = ACTIVATIONS[c.activation]
-        layers: list[nn.Module] = [_conv(c.latent_channels, c.decoder_channels[0]), act()]
-        width = c.decoder_channels[0]
-        for w in c.decoder_channels[1:]:
+        act = ACTIVATIONS[c.model.activation]
+        layers: list[nn.Module] = [_conv(c.model.latent_channels, c.model.decoder_channels[0]), act()]
+        width = c.model.decoder_channels[0]
+        for w in c.model.decoder_channels[1:]:
             layers += [nn.Upsample(scale_factor=2, mode="nearest"), _conv(width, w), act()]
             width = w
         self.up = nn.Sequential(*layers)
-        if c.latent_size * 2 ** len(c.decoder_channels) != c.image_size:
+        if c.model.latent_size * 2 ** len(c.model.decoder_channels) != c.model.image_size:
             raise ValueError("decoder_channels must upsample the latent grid to half the image size")
-        self.full = nn.Sequential(_conv(width + 4 * c.channels, c.full_channels), act())
-        k = c.hypotheses
+        self.full = nn.Sequential(_conv(width + 4 * c.model.channels, c.model.full_channels), act())
+        k = c.outcomes.hypotheses
         # Forked in the latent, D decodes each candidate's own dc: one output per call.
-        drawn = 1 if c.fork == "latent" else k
-        self.out = nn.Conv2d(c.full_channels, 4 * (c.channels + 1) * drawn, 1)
+        drawn = 1 if c.outcomes.fork == "latent" else k
+        self.out = nn.Conv2d(c.model.full_channels, 4 * (c.model.channels + 1) * drawn, 1)
         with torch.no_grad():
-            self.out.bias.view(drawn, c.channels + 1, 4)[:, -1] = MASK_BIAS  # pixel_shuffle: channel-major
-        # How sure each drawn pixel is (config.variance): from the same last features.
-        self.variance = VarianceHead(c.full_channels, drawn, act) if c.variance else None
+            self.out.bias.view(drawn, c.model.channels + 1, 4)[:, -1] = (
+                MASK_BIAS  # pixel_shuffle: channel-major
+            )
+        # How sure each drawn pixel is (config.model.variance): from the same last features.
+        self.variance = VarianceHead(c.model.full_channels, drawn, act) if c.model.variance else None
         if k > 1:  # which candidate is likely, from features pooled over the grid (mean and max)
-            if c.choice_head not in CHOICE_HEADS:
-                raise ValueError(f"choice_head: one of {', '.join(CHOICE_HEADS)}, not {c.choice_head!r}")
-            self.on_grid = c.choice_head == "grid"
-            pooled = c.latent_channels
+            if c.outcomes.choice_head not in CHOICE_HEADS:
+                raise ValueError(
+                    f"choice_head: one of {', '.join(CHOICE_HEADS)}, not {c.outcomes.choice_head!r}"
+                )
+            self.on_grid = c.outcomes.choice_head == "grid"
+            pooled = c.model.latent_channels
             if self.on_grid:  # convolutions over the scene's latent beside each candidate's dc first
-                w = c.choice_channels
-                self.choice_grid = nn.Sequential(_conv(2 * c.latent_channels, w), act(), _conv(w, w), act())
+                w = c.outcomes.choice_channels
+                self.choice_grid = nn.Sequential(
+                    _conv(2 * c.model.latent_channels, w), act(), _conv(w, w), act()
+                )
                 pooled = w
             self.choice = nn.Linear(2 * pooled * (k // drawn), k)
             nn.init.zeros_(self.choice.weight)

@@ -64,61 +64,63 @@ def sequence_loss(
     mask is shut: through eq. (3) alone, a closed mask passes no gradient to the values it
     would let through, and values that never learn give the mask no reason to open.
 
-    "Where it changed" is measured from the true previous state, or with `config.repair` from
+    "Where it changed" is measured from the true previous state, or with `config.loss.repair` from
     the step's own input (the previous prediction): then the mask is also taught to open, and
     D to redraw, where an earlier step left an error (a ghost, a blurred object), instead of
     being taught to keep such errors shut in, so they stop compounding through eq. (3).
 
-    `effects` (B, L, H, W), with `config.loss_effect`: 1 on the pixels where each step had a
+    `effects` (B, L, H, W), with `config.loss.effect`: 1 on the pixels where each step had a
     side effect (data/effects.py). There the squared error is added again, as a mean over those
     pixels alone: a ball that rolls off covers a few hundred of 16,384 pixels, so in the mean
     over the image it weighs nothing, and the squared error (the mean outcome) rather than the
     absolute error (the median) keeps an effect that follows in fewer than half of similar
     cases from being drawn as not happening.
 
-    With `config.loss_coarse`, the absolute error over blocks (`coarse_error`) is added: it
+    With `config.loss.coarse`, the absolute error over blocks (`coarse_error`) is added: it
     charges a missing object, not one drawn a few pixels off.
 
     `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
     c = getattr(net, "module", net).config
     truth = images[:, 1:]
-    many = c.hypotheses > 1
+    many = c.outcomes.hypotheses > 1
     # A variance head trained alone learns the error of the outcome the net carries on when it
     # plans (its own pick), not of the one the truth or a label would pick.
-    own_pick = c.trained == "variance"
+    own_pick = c.training.trained == "variance"
     labels = None
-    if many and c.hypotheses_by == "effect" and effects is not None and not own_pick:  # else the winner
+    if (
+        many and c.outcomes.hypotheses_by == "effect" and effects is not None and not own_pick
+    ):  # else the winner
         labels = effects.flatten(2).any(-1)  # (B, L): the step had a side effect
-    with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.bf16):
+    with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.training.bf16):
         rolled = net(images[:, 0], actions, steps, truth if many and not own_pick else None, labels)
         predicted, differences, candidates = rolled.states, rolled.differences, rolled.candidates
         logits, picks, log_vars = rolled.logits, rolled.picks, rolled.log_variance
     predicted, differences = predicted.float(), differences.float()
     diff = predicted - truth
-    err = c.loss_mse * (diff**2).sum(2).mean((-2, -1))  # (B, L)
-    if c.loss_l1:
-        err = err + c.loss_l1 * diff.abs().sum(2).mean((-2, -1))
-    if c.loss_mask or c.loss_values:
-        changed = change_mask(images, predicted, c.repair)
-        if c.loss_mask:
-            err = err + c.loss_mask * ((differences[:, :, -1:] - changed) ** 2).mean((-3, -2, -1))
-        if c.loss_values:
+    err = c.loss.mse * (diff**2).sum(2).mean((-2, -1))  # (B, L)
+    if c.loss.l1:
+        err = err + c.loss.l1 * diff.abs().sum(2).mean((-2, -1))
+    if c.loss.mask or c.loss.values:
+        changed = change_mask(images, predicted, c.loss.repair)
+        if c.loss.mask:
+            err = err + c.loss.mask * ((differences[:, :, -1:] - changed) ** 2).mean((-3, -2, -1))
+        if c.loss.values:
             values = (differences[:, :, :-1] - truth).abs().sum(2, keepdim=True) * changed
-            err = err + c.loss_values * values.sum((-3, -2, -1)) / changed.sum((-3, -2, -1)).clamp_min(1.0)
-    if c.loss_effect and effects is not None:
+            err = err + c.loss.values * values.sum((-3, -2, -1)) / changed.sum((-3, -2, -1)).clamp_min(1.0)
+    if c.loss.effect and effects is not None:
         on = effects.float()
         squared = (diff**2).sum(2) * on
-        err = err + c.loss_effect * squared.sum((-2, -1)) / on.sum((-2, -1)).clamp_min(1.0)
-    if c.loss_coarse:
-        err = err + c.loss_coarse * coarse_error(diff, c.coarse_px)
+        err = err + c.loss.effect * squared.sum((-2, -1)) / on.sum((-2, -1)).clamp_min(1.0)
+    if c.loss.coarse:
+        err = err + c.loss.coarse * coarse_error(diff, c.loss.coarse_px)
     if many:  # the terms above are the winner's (winner-takes-all); every candidate learns a little
         others = (candidates.float() - truth[:, :, None]).abs().sum(3).mean((-2, -1))  # (B, L, K)
-        err = err + c.loss_others * others.mean(-1)
+        err = err + c.loss.others * others.mean(-1)
         choice = nn.functional.cross_entropy(logits.float().flatten(0, 1), picks.flatten(), reduction="none")
-        err = err + c.loss_choice * choice.view_as(err)
-    if c.loss_nll and log_vars is not None:  # the variance head learns the error of the image held fixed
-        err = err + c.loss_nll * beta_nll(predicted, log_vars.float(), truth, c.nll_beta).mean((-2, -1))
+        err = err + c.loss.choice * choice.view_as(err)
+    if c.loss.nll and log_vars is not None:  # the variance head learns the error of the image held fixed
+        err = err + c.loss.nll * beta_nll(predicted, log_vars.float(), truth, c.loss.nll_beta).mean((-2, -1))
     mask = step_mask(steps, actions.shape[1])
     return (err * mask).sum() / mask.sum()
 
@@ -173,9 +175,9 @@ def share_sampler(flags: dict[str, np.ndarray], shares: dict[str, float], seed: 
 
 def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int):
     """The training runs' sampler over the runs of every part in turn: more turns
-    (`turn_fraction`), more side effects (`effect_fraction`), more places with one
+    (`sampling.turn_fraction`), more side effects (`effect_fraction`), more places with one
     (`place_effect_fraction`), any of them together, or None (runs as the data comes)."""
-    asked = {what: getattr(config, f"{what}_fraction") for what in STEP_MARKS}
+    asked = {what: getattr(config.sampling, f"{what}_fraction") for what in STEP_MARKS}
     asked = {what: share for what, share in asked.items() if share}
     if not asked:
         return None
@@ -187,7 +189,7 @@ def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int
     return share_sampler({what: np.array(f) for what, f in flags.items()}, asked, seed)
 
 
-# config.trained -> whether a parameter (by name) learns.
+# config.training.trained -> whether a parameter (by name) learns.
 TRAINED = {
     "all": lambda name: True,
     "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice"),
@@ -200,18 +202,20 @@ TRAINED = {
 
 
 def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
-    if config.trained not in TRAINED:
-        raise ValueError(f"trained: one of {', '.join(TRAINED)}, not {config.trained!r}")
+    if config.training.trained not in TRAINED:
+        raise ValueError(f"trained: one of {', '.join(TRAINED)}, not {config.training.trained!r}")
     for name, parameter in net.named_parameters():  # the rest is fixed: no gradient is kept
-        parameter.requires_grad_(TRAINED[config.trained](name))
+        parameter.requires_grad_(TRAINED[config.training.trained](name))
     params = [p for p in net.parameters() if p.requires_grad]
     if not params:
-        raise ValueError(f"trained={config.trained!r} leaves nothing to train in this net (fork=latent?)")
-    if config.optimizer == "signsgd":
-        return SignSGD(params, lr=config.lr)
-    if config.optimizer == "adam":
-        return torch.optim.Adam(params, lr=config.lr)
-    raise ValueError(f"unknown optimizer {config.optimizer!r}; expected signsgd or adam")
+        raise ValueError(
+            f"trained={config.training.trained!r} leaves nothing to train in this net (fork=latent?)"
+        )
+    if config.training.optimizer == "signsgd":
+        return SignSGD(params, lr=config.training.lr)
+    if config.training.optimizer == "adam":
+        return torch.optim.Adam(params, lr=config.training.lr)
+    raise ValueError(f"unknown optimizer {config.training.optimizer!r}; expected signsgd or adam")
 
 
 def train(
@@ -229,29 +233,34 @@ def train(
     (`training/distributed.py`). `more_data`: datasets whose train splits join `data_dir`'s
     (validation stays on `data_dir`'s)."""
     world = join_world(device)
-    torch.set_num_threads(rank_threads(config.threads, world))
-    stream = config.seed * 1000 + world.rank  # each rank its own; rank 0 is a lone run's
+    torch.set_num_threads(rank_threads(config.training.threads, world))
+    stream = config.sampling.seed * 1000 + world.rank  # each rank its own; rank 0 is a lone run's
     torch.manual_seed(stream)
     data = Dataset(data_dir)
     augment = AugmentConfig(
-        shift_px=config.shift_px,
-        mirror=config.mirror,
-        angle_flip=config.angle_flip,
-        position_noise=config.position_noise,
-        angle_noise=config.angle_noise,
+        shift_px=config.sampling.shift_px,
+        mirror=config.sampling.mirror,
+        angle_flip=config.sampling.angle_flip,
+        position_noise=config.sampling.position_noise,
+        angle_noise=config.sampling.angle_noise,
     )
-    by_effect = config.hypotheses > 1 and config.hypotheses_by == "effect"
-    if by_effect and config.loss_effect and config.effect_region != "effects":
+    by_effect = config.outcomes.hypotheses > 1 and config.outcomes.hypotheses_by == "effect"
+    if by_effect and config.loss.effect and config.loss.effect_region != "effects":
         raise ValueError("hypotheses_by=effect labels steps by their effect masks: effect_region=effects")
-    region = config.effect_region if config.loss_effect else ("effects" if by_effect else None)
+    region = config.loss.effect_region if config.loss.effect else ("effects" if by_effect else None)
     parts = [
         PredictionData(
-            d, "train", config.max_steps, augment, seed=[stream, j] if j else stream, effect_masks=region
+            d,
+            "train",
+            config.sampling.max_steps,
+            augment,
+            seed=[stream, j] if j else stream,
+            effect_masks=region,
         )
         for j, d in enumerate([data, *(Dataset(more) for more in more_data)])
     ]
-    if config.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
-        rng = np.random.default_rng(config.seed)
+    if config.sampling.bootstrap:  # the same resample on every rank: it is drawn from the seed alone
+        rng = np.random.default_rng(config.sampling.seed)
         for part in parts:
             part.indices = [part.indices[k] for k in rng.integers(len(part), size=len(part))]
     train_set = parts[0] if len(parts) == 1 else JoinedData(parts)
@@ -260,7 +269,11 @@ def train(
     # the one whose head and outcomes learned what training asks, not the one nearest the
     # winners (which a head trained alone drifts away from).
     val_set = PredictionData(
-        data, "val", config.max_steps, random_start=False, effect_masks="effects" if by_effect else None
+        data,
+        "val",
+        config.sampling.max_steps,
+        random_start=False,
+        effect_masks="effects" if by_effect else None,
     )
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)
@@ -268,20 +281,20 @@ def train(
     # training threads never wait for them.
     workers = (
         {
-            "num_workers": config.loader_workers,
+            "num_workers": config.training.loader_workers,
             "worker_init_fn": worker_init,
             "persistent_workers": True,
             "prefetch_factor": 4,
         }
-        if config.loader_workers
+        if config.training.loader_workers
         else {}
     )
     loader = DataLoader(
         train_set,
-        batch_size=rank_batch(config.batch_size, world),
+        batch_size=rank_batch(config.training.batch_size, world),
         drop_last=True,
         collate_fn=collate_prediction,
-        **loader_order(sampler, len(train_set), world, seed=config.seed),
+        **loader_order(sampler, len(train_set), world, seed=config.sampling.seed),
         **workers,
     )
     net = PredictionNet(config).to(world.device)
@@ -315,8 +328,10 @@ def train(
         validate=validate,
         # The paper's schedule halves the lr on plateaus; a short CPU schedule ends better
         # on a cosine decay.
-        lr_at=warmup_cosine(config.warmup, config.steps) if config.schedule == "cosine" else None,
-        patience=config.patience if config.schedule == "plateau" else None,
+        lr_at=warmup_cosine(config.training.warmup, config.training.steps)
+        if config.training.schedule == "cosine"
+        else None,
+        patience=config.training.patience if config.training.schedule == "plateau" else None,
         world=world,
     )
     return run(loop, run_dir, progress)

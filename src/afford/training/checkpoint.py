@@ -19,6 +19,7 @@ from safetensors.torch import load_file, save_file
 from torch import nn
 
 from afford.errors import UserError
+from afford.training.fields import from_dict, merged
 
 FORMAT_VERSION = 1
 # A training run's folder keeps its latest checkpoint and its best by validation loss.
@@ -129,7 +130,7 @@ def export_weights(
     """
     tensors, meta = read_checkpoint(src, kind)
     if config:
-        meta = {**meta, "config": {**meta["config"], **config}}
+        meta = {**meta, "config": merged(meta["config"], config)}
     out = {}
     for k, v in tensors.items():
         if k.startswith("model."):
@@ -146,15 +147,13 @@ def load_net_from_checkpoint(
 ) -> tuple[nn.Module, object, dict]:
     """(net in eval mode, its config, metadata) rebuilt from a checkpoint of `kind`.
 
-    The config comes from the checkpoint itself (JSON lists back to tuples; unknown keys, from
-    an older or newer afford, are ignored), so a net always loads with the shape it was trained at.
+    The config comes from the checkpoint itself (training/fields.from_dict: flat or grouped, JSON
+    lists back to tuples, unknown keys from an older or newer afford ignored), so a net always
+    loads with the shape it was trained at.
     """
     tensors, meta = read_checkpoint(path, kind)
-    fields = config_cls.__dataclass_fields__
     try:
-        config = config_cls(
-            **{k: tuple(v) if isinstance(v, list) else v for k, v in meta["config"].items() if k in fields}
-        )
+        config = from_dict(config_cls, meta["config"])
         net = net_cls(config)
     except (TypeError, ValueError, KeyError) as e:
         raise CheckpointError(f"{path}: unusable {kind} config ({e})") from None

@@ -45,7 +45,7 @@ class LoopState:
 @dataclass
 class Loop:
     kind: str  # "recognition" or "prediction"
-    config: object  # the net's config dataclass: steps, eval_every, log_every and lr come from it
+    config: object  # the net's config dataclass, saved with every checkpoint
     model: nn.Module
     optimizer: torch.optim.Optimizer
     batches: Iterable  # one epoch of batches; iterated again as needed
@@ -55,6 +55,12 @@ class Loop:
     patience: int | None = None  # halve the lr after this many evaluations without improvement
     init: str | Path | None = None  # a new run starts from these weights (fine-tuning)
     world: World = World()  # this process's rank among torchrun's; alone by default
+
+    @property
+    def plan(self):
+        """The record with steps, eval_every, log_every, lr (and grad_clip, if any): the config's
+        `training` record where it groups its fields (training/fields.py), else the config."""
+        return getattr(self.config, "training", self.config)
 
 
 def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:
@@ -114,11 +120,11 @@ class _Run:
         loop, state = self.loop, self.state
         scale = state.lr_scale * (loop.lr_at(state.step) if loop.lr_at else 1.0)
         for g in loop.optimizer.param_groups:
-            g["lr"] = loop.config.lr * scale
+            g["lr"] = loop.plan.lr * scale
         loss, parts = loop.train_step(batch)
         loop.optimizer.zero_grad(set_to_none=True)
         loss.backward()
-        clip = getattr(loop.config, "grad_clip", 0.0)
+        clip = getattr(loop.plan, "grad_clip", 0.0)
         if clip:  # one wild batch must not poison Adam's second moments for thousands of steps
             torch.nn.utils.clip_grad_norm_(loop.model.parameters(), clip)
         loop.optimizer.step()
@@ -129,7 +135,7 @@ class _Run:
 
     def log_running(self) -> float:
         """Log the mean of the last `log_every` steps (over every rank); the mean loss."""
-        n = self.loop.config.log_every
+        n = self.loop.plan.log_every
         means = mean_over_ranks({k: v / n for k, v in self.running.items()}, self.loop.world)
         self.log.add(self.state.step, {f"train/{k}": v for k, v in means.items()} | {"lr": _lr(self.loop)})
         self.running = {}
@@ -158,14 +164,14 @@ class _Run:
 
 
 def run(loop: Loop, run_dir: str | Path, progress: bool = True) -> LoopState:
-    """Train to `loop.config.steps`, resuming where RUN/last.safetensors left off."""
+    """Train to `loop.plan.steps`, resuming where RUN/last.safetensors left off."""
     from tqdm import tqdm
 
     run_dir = Path(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     this = _Run(loop, run_dir)
     this.start()
-    state, config = this.state, loop.config
+    state, config = this.state, loop.plan
     # `kill` (SIGTERM) stops like Ctrl-C, saving a checkpoint first; a background job started
     # from a script ignores SIGINT, so this is how such a run is stopped cleanly.
     previous = signal.signal(signal.SIGTERM, _interrupt)

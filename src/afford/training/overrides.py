@@ -1,11 +1,15 @@
-"""`--set KEY=VALUE`: a config field changed from the command line, typed by the field."""
+"""`--set KEY=VALUE`: a config field changed from the command line, typed by the field.
+
+KEY is a field's flat name (`lr`) or its path in a grouped config (`training.lr`): see
+training/fields.py.
+"""
 
 from __future__ import annotations
 
-import dataclasses
 import typing
 
 from afford.errors import UserError
+from afford.training.fields import flat_names, leaf_type, paths, with_fields
 
 
 class OverrideError(UserError):
@@ -30,23 +34,22 @@ def apply_overrides(config, pairs: list[str] | None):
     """A copy of the frozen dataclass `config` with each "KEY=VALUE" of `pairs` applied."""
     if not pairs:
         return config
-    hints = typing.get_type_hints(type(config))
-    names = {f.name for f in dataclasses.fields(config)}
+    known = paths(type(config))
     changes = {}
     for pair in pairs:
         key, sep, value = pair.partition("=")
         key = key.strip()
-        if not sep or key not in names:
+        if not sep or key not in known:
             raise OverrideError(
-                f"--set {pair!r}: expected KEY=VALUE with KEY one of: {', '.join(sorted(names))}"
+                f"--set {pair!r}: expected KEY=VALUE with KEY one of: {', '.join(flat_names(type(config)))}"
             )
         try:
-            changes[key] = _parse(value.strip(), hints[key])
+            changes[key] = _parse(value.strip(), leaf_type(type(config), known[key]))
         except ValueError as e:
             raise OverrideError(f"--set {pair!r}: {e}") from None
-    return dataclasses.replace(config, **changes)
+    return with_fields(config, **changes)
 
 
 def preset_config(presets: dict, preset: str, **given):
     """A preset's config with the options the command line gave (None: not given) set."""
-    return dataclasses.replace(presets[preset], **{k: v for k, v in given.items() if v is not None})
+    return with_fields(presets[preset], **{k: v for k, v in given.items() if v is not None})

@@ -1,0 +1,119 @@
+"""A config's fields by name, whether the config is flat or groups its fields into records.
+
+Every net's config is a frozen dataclass. A small one is flat (`RecognitionConfig.lr`); a large
+one groups its fields into records (`PredictionConfig.training.lr`). Each field has one path
+(`training.lr`) and one flat name: its own (`lr`), or the one its record gives a name that reads only
+beside the group's (`loss_l1` for `loss.l1`); no two fields share a name. So
+`--set lr=1e-4`, a config stored as one flat dict (the shipped files' form), and a recipe's
+command all name the same field.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import typing
+
+
+def _is_record(kind) -> bool:
+    return isinstance(kind, type) and dataclasses.is_dataclass(kind)
+
+
+@functools.cache
+def hints(cls: type) -> dict[str, object]:
+    """Each field's type, resolved (the annotations are strings under `from __future__`)."""
+    return typing.get_type_hints(cls)
+
+
+@functools.cache
+def paths(cls: type) -> dict[str, tuple[str, ...]]:
+    """Every name a field of `cls` goes by -> its path, e.g. {"lr": ("training", "lr"), ...}."""
+    out: dict[str, tuple[str, ...]] = {}
+
+    def add(name: str, path: tuple[str, ...]) -> None:
+        if out.get(name, path) != path:
+            raise TypeError(f"{cls.__name__}: two fields go by the name {name!r}")
+        out[name] = path
+
+    for f in dataclasses.fields(cls):
+        kind = hints(cls)[f.name]
+        if not _is_record(kind):
+            add(f.name, (f.name,))
+            continue
+        # A field whose name reads only beside its group's (`loss.l1`) has its flat name in
+        # the record's `flat_names` (`loss_l1`); any other goes by its own.
+        renamed = getattr(kind, "flat_names", {})
+        for g in dataclasses.fields(kind):
+            add(f"{f.name}.{g.name}", (f.name, g.name))
+            add(renamed.get(g.name, g.name), (f.name, g.name))
+    return out
+
+
+def leaf_type(cls: type, path: tuple[str, ...]):
+    """The type of the field at `path`."""
+    for name in path[:-1]:
+        cls = hints(cls)[name]
+    return hints(cls)[path[-1]]
+
+
+def flat_names(cls: type) -> list[str]:
+    """Each field's flat name (`lr`, `loss_l1`), as `--set` and stored flat configs write them."""
+    return sorted(name for name in paths(cls) if "." not in name)
+
+
+def flat(config) -> dict[str, object]:
+    """The config's fields as one flat dict, each under its path joined by '.' (`training.lr`)."""
+    out: dict[str, object] = {}
+    for f in dataclasses.fields(config):
+        value = getattr(config, f.name)
+        if dataclasses.is_dataclass(value):
+            out.update({f"{f.name}.{k}": v for k, v in flat(value).items()})
+        else:
+            out[f.name] = value
+    return out
+
+
+def with_fields(config, **changes):
+    """A copy of `config` with the fields named (by any of their names) set."""
+    known = paths(type(config))
+    groups: dict[str, dict[str, object]] = {}
+    top: dict[str, object] = {}
+    for name, value in changes.items():
+        if name not in known:
+            raise TypeError(f"{type(config).__name__} has no field {name!r}")
+        path = known[name]
+        if len(path) == 1:
+            top[path[0]] = value
+        else:
+            groups.setdefault(path[0], {})[path[1]] = value
+    for group, values in groups.items():
+        top[group] = dataclasses.replace(getattr(config, group), **values)
+    return dataclasses.replace(config, **top)
+
+
+def _value(value):
+    return tuple(value) if isinstance(value, list) else value
+
+
+def from_dict(cls: type, stored: dict):
+    """A `cls` from a stored dict: grouped ({"training": {"lr": ...}}) or flat ({"lr": ...},
+    as the shipped files store them). Unknown keys, from an older or newer afford,
+    are ignored; JSON lists come back as tuples."""
+    known = paths(cls)
+    changes: dict[str, object] = {}
+    for key, value in stored.items():
+        if isinstance(value, dict) and key in {f.name for f in dataclasses.fields(cls)}:
+            changes.update({f"{key}.{k}": _value(v) for k, v in value.items() if f"{key}.{k}" in known})
+        elif key in known:
+            changes[key] = _value(value)
+    return with_fields(cls(), **changes)
+
+
+def merged(stored: dict, changes: dict) -> dict:
+    """A stored config dict with `changes` (by flat name) written in: into the group that holds
+    the field where the stored config is grouped, at the top where it is flat."""
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in stored.items()}
+    for name, value in changes.items():
+        group = next((v for v in out.values() if isinstance(v, dict) and name in v), out)
+        group[name] = value
+    return out

@@ -109,7 +109,7 @@ def main() -> None:
         result[name] = profile(config, args.repeats)
     if args.data:
         result["cpu, batches from data"] = profile(
-            PRESETS["cpu"], args.repeats, data_batches(args.data, PRESETS["cpu"].batch_size)
+            PRESETS["cpu"], args.repeats, data_batches(args.data, PRESETS["cpu"].training.batch_size)
         )
     result["paper"]["projected_hours_for_1M_batches"] = round(
         PAPER_BATCHES / result["paper"]["batches_per_second"] / 3600, 1

@@ -8,7 +8,7 @@ import numpy as np
 import torch
 
 from afford.prediction.calibration import fit_platt, report
-from afford.prediction.config import PRESETS
+from afford.prediction.config import PRESETS, PredictionConfig
 from afford.prediction.evaluate import load_net
 from afford.prediction.model import PredictionNet
 from afford.training.checkpoint import export_weights, save_checkpoint
@@ -41,6 +41,7 @@ def test_the_net_reads_its_head_through_the_calibration_and_export_keeps_it(tmp_
         tmp_path / "w.safetensors",
         "prediction",
         config={"choice_scale": 0.5, "choice_bias": -1.0},
+        config_cls=PredictionConfig,
     )
     _, config = load_net(tmp_path / "w.safetensors")
     assert (config.outcomes.choice_scale, config.outcomes.choice_bias) == (0.5, -1.0)

@@ -50,10 +50,15 @@ def test_a_stored_config_reads_back_the_same_whether_grouped_or_flat():
 
 def test_fitted_values_go_into_the_group_that_holds_them():
     stored = dataclasses.asdict(TWO)
-    out = merged(stored, {"choice_scale": 0.5})
-    assert out["outcomes"]["choice_scale"] == 0.5 and "choice_scale" not in out
+    out = merged(PredictionConfig, stored, {"choice_scale": 0.5, "loss_l1": 3.0})
+    assert out["outcomes"]["choice_scale"] == 0.5 and out["loss"]["l1"] == 3.0
+    assert "choice_scale" not in out and "loss_l1" not in out
     assert stored["outcomes"]["choice_scale"] == 1.0  # the stored dict is left as it was
-    assert merged(_legacy(TWO), {"choice_scale": 0.5})["choice_scale"] == 0.5
+    flat_out = merged(PredictionConfig, _legacy(TWO), {"outcomes.choice_scale": 0.5})
+    assert flat_out["choice_scale"] == 0.5 and "outcomes" not in flat_out
+    assert from_dict(PredictionConfig, out).outcomes.choice_scale == 0.5
+    with pytest.raises(TypeError, match="no field 'l1'"):
+        merged(PredictionConfig, stored, {"l1": 3.0})
 
 
 def test_set_names_a_field_by_its_flat_name_or_its_path():

@@ -16,6 +16,7 @@ from afford.data.generate import GenerateConfig, generate
 from afford.data.shard import make_sequence
 from afford.objects.dynamics import (
     PRESETS,
+    DynamicsConfig,
     ObjectDynamics,
     encode_inputs,
     encode_targets,
@@ -208,7 +209,13 @@ def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, c
     assert load_dynamics(run / "best.safetensors").config.outcome_temperature == 3.0
     assert load_dynamics(run / "best.safetensors", calibrated=False).config.outcome_temperature == 1.0
     exported = run / "shipped.safetensors"
-    export_weights(run / "best.safetensors", exported, "dynamics", config={"outcome_temperature": 2.0})
+    export_weights(
+        run / "best.safetensors",
+        exported,
+        "dynamics",
+        config={"outcome_temperature": 2.0},
+        config_cls=DynamicsConfig,
+    )
     assert load_dynamics(exported).config.outcome_temperature == 2.0
     (run / "calibration.json").write_text(json.dumps({"outcome_temperature": 3.0, "step": step + 1}))
     assert load_dynamics(run / "best.safetensors").config.outcome_temperature == 1.0

@@ -175,6 +175,7 @@ def cmd_export(args) -> int:
     recognition net stays in float32, since float16 moved detections across the cut-off (one
     of 797 on the train states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
     from afford.prediction.calibration import read_calibration
+    from afford.prediction.config import PredictionConfig
     from afford.prediction.ensemble import MEMBERS_DIR
     from afford.recognition.infer import read_threshold
     from afford.shipped import PREDICTION_FILE, RECOGNITION_FILE
@@ -192,14 +193,22 @@ def cmd_export(args) -> int:
             rec_run / args.checkpoint, out / RECOGNITION_FILE, "recognition", half=False, extra=extra
         ),
         PREDICTION_FILE: export_weights(
-            pred_run / args.checkpoint, out / PREDICTION_FILE, "prediction", config=read_calibration(pred_run)
+            pred_run / args.checkpoint,
+            out / PREDICTION_FILE,
+            "prediction",
+            config=read_calibration(pred_run),
+            config_cls=PredictionConfig,
         ),
     }
     for k, run in enumerate(members, start=1):
         name = f"{MEMBERS_DIR}/prediction-{k}.safetensors"
         (out / MEMBERS_DIR).mkdir(parents=True, exist_ok=True)
         sizes[name] = export_weights(
-            run / args.checkpoint, out / name, "prediction", config=read_calibration(run)
+            run / args.checkpoint,
+            out / name,
+            "prediction",
+            config=read_calibration(run),
+            config_cls=PredictionConfig,
         )
     if args.side:  # the side-effect outcome's net beside the prediction net: they load as a pair
         from afford.prediction.evaluate import load_net

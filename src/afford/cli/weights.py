@@ -115,14 +115,18 @@ def _recognition(run: Path) -> dict:
 
 def _prediction(run: Path) -> dict:
     from afford.prediction.calibration import read_calibration
+    from afford.prediction.config import PredictionConfig
 
-    return {"config": read_calibration(run)}  # the head's scaling, fitted by `afford eval prediction --run`
+    # the head's scaling, fitted by `afford eval prediction --run`
+    return {"config": read_calibration(run), "config_cls": PredictionConfig}
 
 
 def _dynamics(run: Path) -> dict:
     from afford.objects.calibration import read_calibration
+    from afford.objects.dynamics import DynamicsConfig
 
-    return {"config": read_calibration(run)}  # the outcome temperature, fitted when training ended
+    # the outcome temperature, fitted when training ended
+    return {"config": read_calibration(run), "config_cls": DynamicsConfig}
 
 
 # How each kind of net is exported: keyword arguments of training.checkpoint.export_weights.

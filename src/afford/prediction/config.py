@@ -221,7 +221,7 @@ class TrainingConfig:
 @dataclass(frozen=True)
 class PredictionConfig:
     """The EM*D net's config: its shape, outcomes, loss, training runs and schedule, each a
-        record. `training.fields` gives each field a flat name too (`lr`, `hypotheses`, `loss_l1`), as
+    record. `training.fields` gives each field a flat name too (`lr`, `hypotheses`, `loss_l1`), as
     `--set` and configs stored as one flat dict (the shipped files) write them."""
 
     model: ModelConfig = ModelConfig()

@@ -121,16 +121,20 @@ def export_weights(
     extra: dict | None = None,
     config: dict | None = None,
     beside: dict[str, str] | None = None,
+    config_cls: type | None = None,
 ) -> int:
     """A checkpoint's weights alone (no optimiser state), float16 by default, for shipping.
 
     Returns the file size in bytes. `extra` is merged into the metadata (e.g. the tuned cut-off),
-    `config` into the net's config (values fitted after training, e.g. a head's calibration);
+    `config` into the net's config (values fitted after training, e.g. a head's calibration;
+    by field name, so `config_cls`, the config's class, must come with it);
     `beside` adds safetensors metadata keys next to the checkpoint's own (e.g. its recipe).
     """
     tensors, meta = read_checkpoint(src, kind)
     if config:
-        meta = {**meta, "config": merged(meta["config"], config)}
+        if config_cls is None:
+            raise TypeError("export_weights: config values need the config's class (config_cls)")
+        meta = {**meta, "config": merged(config_cls, meta["config"], config)}
     out = {}
     for k, v in tensors.items():
         if k.startswith("model."):

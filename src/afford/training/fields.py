@@ -35,6 +35,7 @@ def paths(cls: type) -> dict[str, tuple[str, ...]]:
             raise TypeError(f"{cls.__name__}: two fields go by the name {name!r}")
         out[name] = path
 
+    groups = [f.name for f in dataclasses.fields(cls) if _is_record(hints(cls)[f.name])]
     for f in dataclasses.fields(cls):
         kind = hints(cls)[f.name]
         if not _is_record(kind):
@@ -43,9 +44,13 @@ def paths(cls: type) -> dict[str, tuple[str, ...]]:
         # A field whose name reads only beside its group's (`loss.l1`) has its flat name in
         # the record's `flat_names` (`loss_l1`); any other goes by its own.
         renamed = getattr(kind, "flat_names", {})
+        if set(renamed) - {g.name for g in dataclasses.fields(kind)}:
+            raise TypeError(f"{kind.__name__}.flat_names names no field: {set(renamed) - set(hints(kind))}")
         for g in dataclasses.fields(kind):
             add(f"{f.name}.{g.name}", (f.name, g.name))
             add(renamed.get(g.name, g.name), (f.name, g.name))
+    if clash := [name for name in out if name in groups and out[name] != (name,)]:
+        raise TypeError(f"{cls.__name__}: a field goes by the name of the group {clash[0]!r}")
     return out
 
 
@@ -74,7 +79,8 @@ def flat(config) -> dict[str, object]:
 
 
 def with_fields(config, **changes):
-    """A copy of `config` with the fields named (by any of their names) set."""
+    """A copy of `config` with the fields named (by any of their names) set; a field named
+    twice (`lr` and `training.lr`) takes the later value, as a repeated `--set` does."""
     known = paths(type(config))
     groups: dict[str, dict[str, object]] = {}
     top: dict[str, object] = {}
@@ -97,23 +103,32 @@ def _value(value):
 
 def from_dict(cls: type, stored: dict):
     """A `cls` from a stored dict: grouped ({"training": {"lr": ...}}) or flat ({"lr": ...},
-    as the shipped files store them). Unknown keys, from an older or newer afford,
-    are ignored; JSON lists come back as tuples."""
+    as the shipped files store them); a group's entries first, then flat names. Unknown keys,
+    from an older or newer afford, are ignored; JSON lists come back as tuples."""
     known = paths(cls)
+    groups = {f.name for f in dataclasses.fields(cls) if _is_record(hints(cls)[f.name])}
     changes: dict[str, object] = {}
     for key, value in stored.items():
-        if isinstance(value, dict) and key in {f.name for f in dataclasses.fields(cls)}:
+        if key in groups and isinstance(value, dict):
             changes.update({f"{key}.{k}": _value(v) for k, v in value.items() if f"{key}.{k}" in known})
-        elif key in known:
-            changes[key] = _value(value)
+    for key, value in stored.items():
+        if key not in groups and key in known:
+            changes[".".join(known[key])] = _value(value)
     return with_fields(cls(), **changes)
 
 
-def merged(stored: dict, changes: dict) -> dict:
-    """A stored config dict with `changes` (by flat name) written in: into the group that holds
-    the field where the stored config is grouped, at the top where it is flat."""
+def merged(cls: type, stored: dict, changes: dict) -> dict:
+    """A stored config dict of a `cls` with `changes` (by any of their names) written in: into
+    the field's group where the stored config is grouped, under its flat name where it is flat."""
+    known = paths(cls)
+    flat_name = {path: name for name, path in known.items() if "." not in name}
     out = {k: dict(v) if isinstance(v, dict) else v for k, v in stored.items()}
     for name, value in changes.items():
-        group = next((v for v in out.values() if isinstance(v, dict) and name in v), out)
-        group[name] = value
+        if name not in known:
+            raise TypeError(f"{cls.__name__} has no field {name!r}")
+        path = known[name]
+        if len(path) == 2 and isinstance(out.get(path[0]), dict):
+            out[path[0]][path[1]] = value
+        else:
+            out[flat_name[path]] = value
     return out

@@ -9,6 +9,7 @@ every rank runs this loop, and only rank 0 writes (`training/distributed.py`).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import signal
@@ -60,7 +61,8 @@ class Loop:
     def plan(self):
         """The record with steps, eval_every, log_every, lr (and grad_clip, if any): the config's
         `training` record where it groups its fields (training/fields.py), else the config."""
-        return getattr(self.config, "training", self.config)
+        training = getattr(self.config, "training", None)
+        return training if dataclasses.is_dataclass(training) else self.config
 
 
 def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:

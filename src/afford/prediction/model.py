@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from afford.prediction.config import CHANGED, PredictionConfig
+from afford.prediction.config import CHANGED, OutcomesConfig, PredictionConfig
 from afford.prediction.dense import DenseDecoder, DenseEncoder, DenseP
 from afford.prediction.layers import apply_difference, clamped_tanh, normalise_latent
 from afford.prediction.rollout import Rollouts
@@ -125,32 +125,35 @@ FORKS = ("decoder", "latent")
 class PredictionNet(Rollouts, nn.Module):
     def __init__(self, config: PredictionConfig):
         super().__init__()
-        if config.model.architecture not in ARCHITECTURES:
+        m, o = config.model, config.outcomes
+        if m.architecture not in ARCHITECTURES:
             raise ValueError(
-                f"unknown prediction architecture {config.model.architecture!r}; "
-                f"expected one of {sorted(ARCHITECTURES)}"
+                f"unknown prediction architecture {m.architecture!r}; expected one of {sorted(ARCHITECTURES)}"
             )
-        if config.outcomes.hypotheses < 1 or (
-            config.outcomes.hypotheses > 1 and config.model.architecture != "spatial"
-        ):
+        if o.hypotheses < 1 or (o.hypotheses > 1 and m.architecture != "spatial"):
             raise ValueError("hypotheses: 1, or more with the spatial architecture")
-        if config.outcomes.hypotheses_by not in ("winner", "effect"):
-            raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {config.outcomes.hypotheses_by!r}")
-        if config.outcomes.fork not in FORKS:
-            raise ValueError(f"fork: one of {', '.join(FORKS)}, not {config.outcomes.fork!r}")
-        if config.model.variance and config.model.architecture != "spatial":
+        if o.hypotheses_by not in ("winner", "effect"):
+            raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {o.hypotheses_by!r}")
+        if o.fork not in FORKS:
+            raise ValueError(f"fork: one of {', '.join(FORKS)}, not {o.fork!r}")
+        if m.variance and m.architecture != "spatial":
             raise ValueError("variance: a variance head needs the spatial architecture")
-        if config.outcomes.hypotheses_by == "effect" and config.outcomes.hypotheses != 2:
+        if o.hypotheses_by == "effect" and o.hypotheses != 2:
             raise ValueError("hypotheses_by=effect needs hypotheses=2: a canonical and a side-effect outcome")
-        encoder, p_module, decoder = ARCHITECTURES[config.model.architecture]
+        encoder, p_module, decoder = ARCHITECTURES[m.architecture]
         self.config = config
         self.encoder = encoder(config)
         self.decoder = decoder(config)
-        self.modules_by_type = nn.ModuleList(p_module(config) for _ in config.model.types)
+        self.modules_by_type = nn.ModuleList(p_module(config) for _ in m.types)
         # Channels-last: the small convolutions over 128x128 images run ~3x faster on CPUs.
-        self.to(memory_format=torch.channels_last) if config.model.architecture == "dense" else None
-        self.register_buffer("pos_centre", torch.tensor(config.model.position_centre), persistent=False)
-        self.register_buffer("pos_scale", torch.tensor(config.model.position_scale), persistent=False)
+        self.to(memory_format=torch.channels_last) if m.architecture == "dense" else None
+        self.register_buffer("pos_centre", torch.tensor(m.position_centre), persistent=False)
+        self.register_buffer("pos_scale", torch.tensor(m.position_scale), persistent=False)
+
+    @property
+    def outcomes(self) -> OutcomesConfig:
+        """The config's outcomes record: how many D draws, where they part, the head's scaling."""
+        return self.config.outcomes
 
     def encode(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """E: (c_0, m_0) for images (B, C, H, W); the memory trace starts at zeros."""
@@ -194,9 +197,9 @@ class PredictionNet(Rollouts, nn.Module):
     def candidates(self, latent, memory, image, rows) -> Candidates:
         """K > 1: every candidate of one step (`Candidates`)."""
         dc, memory_out = self._p_step(latent, memory, image, rows)
-        b, k = len(image), self.config.outcomes.hypotheses
+        b, k = len(image), self.outcomes.hypotheses
         repeated = image.repeat_interleave(k, 0)
-        forked = self.config.outcomes.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
+        forked = self.outcomes.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
         difference, log_var = (
             self.decoder.decode(dc.flatten(0, 1), repeated) if forked else self.decoder.decode(dc, image)
         )
@@ -219,7 +222,7 @@ class PredictionNet(Rollouts, nn.Module):
         """Every outcome of one step, each carried on as its own state, with the choice head's
         probability of each: what a planner that keeps the alternatives (planning/branches.py)
         grows. One outcome of probability 1 for a one-hypothesis net."""
-        if self.config.outcomes.hypotheses == 1:
+        if self.outcomes.hypotheses == 1:
             step = self.step_hypotheses(latent, memory, image, rows)
             return Outcomes(
                 step.latent[:, None],
@@ -235,8 +238,8 @@ class PredictionNet(Rollouts, nn.Module):
     def outcome_states(self, latent, dc, memory_out) -> tuple[torch.Tensor, torch.Tensor]:
         """K > 1: every candidate's next latent and memory trace (B, K, ...) from `candidates`'
         dc and memory (one for all candidates unless forked in the latent)."""
-        k = self.config.outcomes.hypotheses
-        if self.config.outcomes.fork != "latent":  # one dc and memory for every candidate
+        k = self.outcomes.hypotheses
+        if self.outcomes.fork != "latent":  # one dc and memory for every candidate
             dc = dc[:, None].expand(-1, k, *dc.shape[1:])
             memory_out = memory_out[:, None].expand(-1, k, *memory_out.shape[1:])
         next_latent = self.encoder.renormalise((latent[:, None] + dc).flatten(0, 1))  # eq. (2)
@@ -247,16 +250,13 @@ class PredictionNet(Rollouts, nn.Module):
         side effect's logit read through the config's calibration (per action type where the
         config has one and the action rows (B, 7) are given); else their softmax."""
         logits = logits.float()
-        if self.config.outcomes.hypotheses_by != "effect":
+        if self.outcomes.hypotheses_by != "effect":
             return logits.softmax(1)
-        c = self.config
-        scale, bias = c.outcomes.choice_scale, c.outcomes.choice_bias
-        if c.outcomes.choice_scales and rows is not None:
+        o = self.outcomes
+        scale, bias = o.choice_scale, o.choice_bias
+        if o.choice_scales and rows is not None:
             kind = rows[:, Col.TYPE].long().to(logits.device)
-            scale, bias = (
-                logits.new_tensor(c.outcomes.choice_scales)[kind],
-                logits.new_tensor(c.outcomes.choice_biases)[kind],
-            )
+            scale, bias = logits.new_tensor(o.choice_scales)[kind], logits.new_tensor(o.choice_biases)[kind]
         side = torch.sigmoid(scale * (logits[:, 1] - logits[:, 0]) + bias)
         return torch.stack([1 - side, side], 1)
 
@@ -273,7 +273,7 @@ class PredictionNet(Rollouts, nn.Module):
         one `label` (B,) names where it is given (training by effect labels), else the one
         nearest `truth` where that is given (training's winner-takes-all), else the one the
         choice head finds most likely."""
-        k = self.config.outcomes.hypotheses
+        k = self.outcomes.hypotheses
         if k == 1:
             dc, memory_out = self._p_step(latent, memory, image, rows)
             difference, log_var = self.decoder.decode(dc, image)
@@ -284,9 +284,7 @@ class PredictionNet(Rollouts, nn.Module):
         picked = self.pick(c.images, c.differences, c.logits, image, rows, truth, label)
         at = torch.arange(len(image), device=image.device)
         dc, memory_out = c.dc, c.memory
-        if (
-            self.config.outcomes.fork == "latent"
-        ):  # the candidate carried on gives eq. (2) its dc, and its memory
+        if self.outcomes.fork == "latent":  # the candidate carried on gives eq. (2) its dc, and its memory
             dc, memory_out = dc[at, picked], memory_out[at, picked]
         next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
         return Step(
@@ -305,8 +303,8 @@ class PredictionNet(Rollouts, nn.Module):
             return label.long()
         if truth is not None:
             return winners(candidates, differences, image, truth)
-        if self.config.outcomes.hypotheses_by == "effect":
-            return (self.probabilities(logits, rows)[:, 1] > self.config.outcomes.effect_threshold).long()
+        if self.outcomes.hypotheses_by == "effect":
+            return (self.probabilities(logits, rows)[:, 1] > self.outcomes.effect_threshold).long()
         return logits.argmax(1)
 
     def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
@@ -314,7 +312,7 @@ class PredictionNet(Rollouts, nn.Module):
         hypotheses): D's output repeated for each candidate, each a little apart so that
         winner-takes-all can tell them apart, and the choice head as initialised (uniform).
         Weights without a variance head for a net with one: the head as initialised."""
-        k = self.config.outcomes.hypotheses
+        k = self.outcomes.hypotheses
         own = self.state_dict()
         state = dict(state)
         for name in own:  # a net given a variance head: the head as initialised, the rest as trained
@@ -352,7 +350,7 @@ class PredictionNet(Rollouts, nn.Module):
         P^a's last `fork_blocks` blocks in order, its `out` the P^a's output layer."""
         head, _, tail = name.partition(".forks.")
         part = tail.split(".", 1)[1]  # "block.conv1.weight", "before.0.conv1.weight" or "out.bias"
-        first = self.config.model.p_blocks - self.config.outcomes.fork_blocks
+        first = self.config.model.p_blocks - self.outcomes.fork_blocks
         if part.startswith("block."):
             return f"{head}.blocks.{self.config.model.p_blocks - 1}.{part[len('block.') :]}"
         if part.startswith("before."):

@@ -2,8 +2,8 @@
 
 Every net's config is a frozen dataclass. A small one is flat (`RecognitionConfig.lr`); a large
 one groups its fields into records (`PredictionConfig.training.lr`). Each field has one path
-(`training.lr`) and one flat name: its own (`lr`), or the one its record gives a name that reads only
-beside the group's (`loss_l1` for `loss.l1`); no two fields share a name. So
+(`training.lr`) and one flat name: its own (`lr`), or, where its name says little outside its
+group, the one its record gives it (`loss_l1` for `loss.l1`); no two fields share a name. So
 `--set lr=1e-4`, a config stored as one flat dict (the shipped files' form), and a recipe's
 command all name the same field.
 """
@@ -44,8 +44,8 @@ def paths(cls: type) -> dict[str, tuple[str, ...]]:
         # A field whose name reads only beside its group's (`loss.l1`) has its flat name in
         # the record's `flat_names` (`loss_l1`); any other goes by its own.
         renamed = getattr(kind, "flat_names", {})
-        if set(renamed) - {g.name for g in dataclasses.fields(kind)}:
-            raise TypeError(f"{kind.__name__}.flat_names names no field: {set(renamed) - set(hints(kind))}")
+        if stray := set(renamed) - {g.name for g in dataclasses.fields(kind)}:
+            raise TypeError(f"{kind.__name__}.flat_names names no field: {sorted(stray)}")
         for g in dataclasses.fields(kind):
             add(f"{f.name}.{g.name}", (f.name, g.name))
             add(renamed.get(g.name, g.name), (f.name, g.name))

@@ -26,6 +26,12 @@ def hints(cls: type) -> dict[str, object]:
 
 
 @functools.cache
+def groups(cls: type) -> frozenset[str]:
+    """The fields of `cls` that are records of fields (none in a flat config)."""
+    return frozenset(f.name for f in dataclasses.fields(cls) if _is_record(hints(cls)[f.name]))
+
+
+@functools.cache
 def paths(cls: type) -> dict[str, tuple[str, ...]]:
     """Every name a field of `cls` goes by -> its path, e.g. {"lr": ("training", "lr"), ...}."""
     out: dict[str, tuple[str, ...]] = {}
@@ -35,10 +41,9 @@ def paths(cls: type) -> dict[str, tuple[str, ...]]:
             raise TypeError(f"{cls.__name__}: two fields go by the name {name!r}")
         out[name] = path
 
-    groups = [f.name for f in dataclasses.fields(cls) if _is_record(hints(cls)[f.name])]
     for f in dataclasses.fields(cls):
         kind = hints(cls)[f.name]
-        if not _is_record(kind):
+        if f.name not in groups(cls):
             add(f.name, (f.name,))
             continue
         # A field whose name reads only beside its group's (`loss.l1`) has its flat name in
@@ -49,7 +54,7 @@ def paths(cls: type) -> dict[str, tuple[str, ...]]:
         for g in dataclasses.fields(kind):
             add(f"{f.name}.{g.name}", (f.name, g.name))
             add(renamed.get(g.name, g.name), (f.name, g.name))
-    if clash := [name for name in out if name in groups and out[name] != (name,)]:
+    if clash := [name for name in out if name in groups(cls)]:
         raise TypeError(f"{cls.__name__}: a field goes by the name of the group {clash[0]!r}")
     return out
 
@@ -82,7 +87,7 @@ def with_fields(config, **changes):
     """A copy of `config` with the fields named (by any of their names) set; a field named
     twice (`lr` and `training.lr`) takes the later value, as a repeated `--set` does."""
     known = paths(type(config))
-    groups: dict[str, dict[str, object]] = {}
+    by_group: dict[str, dict[str, object]] = {}
     top: dict[str, object] = {}
     for name, value in changes.items():
         if name not in known:
@@ -91,8 +96,8 @@ def with_fields(config, **changes):
         if len(path) == 1:
             top[path[0]] = value
         else:
-            groups.setdefault(path[0], {})[path[1]] = value
-    for group, values in groups.items():
+            by_group.setdefault(path[0], {})[path[1]] = value
+    for group, values in by_group.items():
         top[group] = dataclasses.replace(getattr(config, group), **values)
     return dataclasses.replace(config, **top)
 
@@ -105,14 +110,13 @@ def from_dict(cls: type, stored: dict):
     """A `cls` from a stored dict: grouped ({"training": {"lr": ...}}) or flat ({"lr": ...},
     as the shipped files store them); a group's entries first, then flat names. Unknown keys,
     from an older or newer afford, are ignored; JSON lists come back as tuples."""
-    known = paths(cls)
-    groups = {f.name for f in dataclasses.fields(cls) if _is_record(hints(cls)[f.name])}
+    known, records = paths(cls), groups(cls)
     changes: dict[str, object] = {}
     for key, value in stored.items():
-        if key in groups and isinstance(value, dict):
+        if key in records and isinstance(value, dict):
             changes.update({f"{key}.{k}": _value(v) for k, v in value.items() if f"{key}.{k}" in known})
     for key, value in stored.items():
-        if key not in groups and key in known:
+        if key not in records and key in known:
             changes[".".join(known[key])] = _value(value)
     return with_fields(cls(), **changes)
 

@@ -53,6 +53,9 @@ class RecognitionConfig:
     # predicted states (labelled by the true states' affordances), the rest true states.
     predicted_fraction: float = 0.5
     threads: int = 2
+    # The random stream (draws, augmentation, initial weights); 0 is every shipped recipe's,
+    # another measures how far two runs of one recipe differ.
+    seed: int = 0
 
     @property
     def grid(self) -> int:

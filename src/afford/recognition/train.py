@@ -46,10 +46,11 @@ def train(
     (`training/distributed.py`)."""
     world = join_world(device)
     torch.set_num_threads(rank_threads(config.threads, world))
-    torch.manual_seed(world.rank)  # each rank its own random stream; rank 0 is a lone run's
+    stream = config.seed * 1000 + world.rank  # each rank its own; rank 0 is a lone run's
+    torch.manual_seed(stream)
     data = Dataset(data_dir)
     augment = AugmentConfig(shift_px=config.shift_px, mirror=False, angle_flip=False)
-    train_set = RecognitionData(data, "train", augment, seed=world.rank)
+    train_set = RecognitionData(data, "train", augment, seed=stream)
     val_set = RecognitionData(data, "val")
     n_val = min(VAL_IMAGES, len(val_set))
     val_images, val_rows = collate_recognition(
@@ -61,8 +62,8 @@ def train(
     )
     sampler = None  # a shuffle
     if predicted is not None:
-        futures = PredictedStates(predicted, data, augment, seed=world.rank)
-        sampler = mixed_sampler(len(train_set), len(futures), config.predicted_fraction)
+        futures = PredictedStates(predicted, data, augment, seed=stream)
+        sampler = mixed_sampler(len(train_set), len(futures), config.predicted_fraction, seed=config.seed)
         train_set = ConcatDataset([train_set, futures])
     loader = DataLoader(
         train_set,

@@ -304,3 +304,20 @@ def test_the_coarse_loss_is_part_of_the_training_loss():
         term = float(coarse_error(net.rollout(images[:, 0], actions, steps) - images[:, 1:], 8).mean())
         with_coarse = float(sequence_loss(coarse, images, actions, steps))
     assert term > 0 and with_coarse == pytest.approx(base + 2.0 * term, rel=1e-4)
+
+
+def test_recognition_runs_repeat_with_one_seed_and_differ_with_another(small_dataset, tmp_path):
+    from safetensors.torch import load_file
+
+    from afford.recognition.config import PRESETS
+    from afford.recognition.train import train
+
+    def weights(seed: int, name: str) -> dict[str, torch.Tensor]:
+        config = with_fields(PRESETS["tiny"], steps=3, threads=1, seed=seed)
+        train(small_dataset, config, tmp_path / name, progress=False)
+        return load_file(tmp_path / name / "last.safetensors")
+
+    first, again, other = weights(0, "a"), weights(0, "b"), weights(1, "c")
+    shared = [k for k in first if first[k].is_floating_point()]
+    assert all(torch.equal(first[k], again[k]) for k in shared)
+    assert not all(torch.equal(first[k], other[k]) for k in shared)

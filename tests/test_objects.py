@@ -370,6 +370,44 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
         assert torch.allclose(value, after[key], atol=1e-4), key
 
 
+def test_outline_pixels_weigh_more_only_when_asked():
+    import torch.nn.functional as F
+
+    from afford.objects.perception import SEG_WEIGHT, loss, outlines
+
+    masks = np.full((1, 6, 6), -1)
+    masks[0, 2:4, 1:3] = 0  # a 2 x 2 object beside another
+    masks[0, 2:4, 3:5] = 4
+    edge = outlines(masks)[0]
+    assert edge[2:4, 1:5].all()  # every pixel of two 2 x 2 objects touches another or the table
+    assert edge[1, 1] and edge[4, 4] and not edge[0, 0] and not edge[5, 5]
+    torch.manual_seed(0)
+    seg = torch.from_numpy(np.where(masks >= 0, 1 + (masks > 0), 0))
+    t = {"seg": seg, "edge": torch.from_numpy(outlines(masks))}
+    t |= {
+        k: torch.zeros(1, c, 6, 6)
+        for k, c in (("heat", 4), ("offset", 2), ("z", 1), ("up", 3), ("along", 6), ("held", 1))
+    }
+    t["posture"] = torch.full((1, 6, 6), -100)
+    out = {
+        k: torch.randn(1, c, 6, 6)
+        for k, c in (
+            ("seg", 5),
+            ("heat", 4),
+            ("offset", 2),
+            ("z", 1),
+            ("up", 3),
+            ("along", 6),
+            ("held", 1),
+            ("posture", 3),
+        )
+    }
+    _, plain = loss(out, t)
+    assert np.isclose(plain["seg"], float(F.cross_entropy(out["seg"], seg, weight=SEG_WEIGHT)), rtol=1e-5)
+    _, weighted = loss(out, t, edge_weight=4.0)
+    assert not np.isclose(weighted["seg"], plain["seg"]) and weighted["heat"] == plain["heat"]
+
+
 @pytest.mark.parametrize("name", ["upright", "tipped", "lying"])
 def test_an_up_axis_is_made_to_agree_with_a_posture(name):
     from afford.objects.state import fit_posture, posture

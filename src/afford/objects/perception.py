@@ -60,6 +60,10 @@ class PerceptionConfig:
     width: int = 16  # channels at half resolution; each further stride 2 doubles them
     depth: int = 1  # bottlenecks per CSP stage
     sigma_px: float = 1.5
+    # The weight of a pixel on an object's outline (either side of it) in the kind and offset
+    # losses, against 1 elsewhere: the masks lose most of their missed pixels there
+    # (docs/experiments/objects-perception.md). 1 is the shipped net's.
+    edge_weight: float = 1.0
     # training
     steps: int = 8000
     batch: int = 16
@@ -185,6 +189,7 @@ def targets(
     along = np.zeros((b, 6, SIZE, SIZE), np.float32)
     is_held = np.zeros((b, 1, SIZE, SIZE), np.float32)
     stance = np.full((b, SIZE, SIZE), NO_POSTURE, np.int64)
+    edge = outlines(masks)
     for i in range(b):
         for slot in np.unique(masks[i]):
             if slot < 0 or np.isnan(poses[i, slot, 0]):
@@ -216,7 +221,21 @@ def targets(
         "along": t(along),
         "held": t(is_held),
         "posture": t(stance),
+        "edge": t(edge),
     }
+
+
+def outlines(masks: np.ndarray) -> np.ndarray:
+    """(B, H, W) 1.0 where a pixel's 4-neighbourhood holds another instance (or the background,
+    for an object's pixel, and an object, for a background pixel), else 0.0."""
+    edge = np.zeros(masks.shape, bool)
+    across = masks[:, 1:, :] != masks[:, :-1, :]
+    edge[:, 1:, :] |= across
+    edge[:, :-1, :] |= across
+    across = masks[:, :, 1:] != masks[:, :, :-1]
+    edge[:, :, 1:] |= across
+    edge[:, :, :-1] |= across
+    return edge.astype(np.float32)
 
 
 def focal_heat(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
@@ -228,17 +247,24 @@ def focal_heat(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return (pos.sum() + neg.sum()) / peak.sum().clamp(min=1)
 
 
-def loss(out: dict[str, torch.Tensor], t: dict[str, torch.Tensor]) -> tuple[torch.Tensor, dict[str, float]]:
+def loss(
+    out: dict[str, torch.Tensor], t: dict[str, torch.Tensor], edge_weight: float = 1.0
+) -> tuple[torch.Tensor, dict[str, float]]:
+    at = 1 + (edge_weight - 1) * t["edge"]  # each pixel's weight in the kind and offset losses
     obj = (t["seg"] > 0).float()[:, None]
     n = obj.sum().clamp(min=1)
+    seg_weight = SEG_WEIGHT.to(out["seg"])
+    kind = F.cross_entropy(out["seg"], t["seg"], weight=seg_weight, reduction="none")
+    offset = F.smooth_l1_loss(out["offset"], t["offset"], reduction="none", beta=0.05) * obj * at[:, None]
     weights = POSTURE_WEIGHT.to(out["posture"])
     # A ball's up axis still counts (it is drawn with it), at the weight of upright.
     rare = torch.where(t["posture"] >= 0, weights[t["posture"].clamp(min=0)], 1.0)[:, None] * obj
     parts = {
         # Objects cover a tenth of the image: their pixels weigh more, or the table wins.
-        "seg": F.cross_entropy(out["seg"], t["seg"], weight=SEG_WEIGHT.to(out["seg"])),
+        # With every pixel at weight 1, cross-entropy's own weighted mean.
+        "seg": (kind * at).sum() / (seg_weight[t["seg"]] * at).sum(),
         "heat": focal_heat(out["heat"], t["heat"]),
-        "offset": (F.smooth_l1_loss(out["offset"], t["offset"], reduction="none", beta=0.05) * obj).sum() / n,
+        "offset": offset.sum() / (obj * at[:, None]).sum().clamp(min=1),
         "z": (F.smooth_l1_loss(out["z"], t["z"], reduction="none", beta=0.05) * obj).sum() / n,
         "up": ((out["up"] - t["up"]) ** 2 * rare).sum() / rare.sum().clamp(min=1),
         "along": ((out["along"] - t["along"]) ** 2 * obj).sum() / n,

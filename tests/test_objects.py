@@ -373,7 +373,7 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
 def test_outline_pixels_weigh_more_only_when_asked():
     import torch.nn.functional as F
 
-    from afford.objects.perception import SEG_WEIGHT, loss, outlines
+    from afford.objects.perception import HEADS, NO_POSTURE, SEG_WEIGHT, loss, outlines
 
     masks = np.full((1, 6, 6), -1)
     masks[0, 2:4, 1:3] = 0  # a 2 x 2 object beside another
@@ -384,24 +384,10 @@ def test_outline_pixels_weigh_more_only_when_asked():
     torch.manual_seed(0)
     seg = torch.from_numpy(np.where(masks >= 0, 1 + (masks > 0), 0))
     t = {"seg": seg, "edge": torch.from_numpy(outlines(masks))}
-    t |= {
-        k: torch.zeros(1, c, 6, 6)
-        for k, c in (("heat", 4), ("offset", 2), ("z", 1), ("up", 3), ("along", 6), ("held", 1))
-    }
-    t["posture"] = torch.full((1, 6, 6), -100)
-    out = {
-        k: torch.randn(1, c, 6, 6)
-        for k, c in (
-            ("seg", 5),
-            ("heat", 4),
-            ("offset", 2),
-            ("z", 1),
-            ("up", 3),
-            ("along", 6),
-            ("held", 1),
-            ("posture", 3),
-        )
-    }
+    # every other head's target at zero, the net's outputs drawn at random, per the heads' sizes
+    t |= {k: torch.zeros(1, c, 6, 6) for k, c in HEADS.items() if k not in ("seg", "posture")}
+    t["posture"] = torch.full((1, 6, 6), NO_POSTURE)
+    out = {k: torch.randn(1, c, 6, 6) for k, c in HEADS.items()}
     _, plain = loss(out, t)
     assert np.isclose(plain["seg"], float(F.cross_entropy(out["seg"], seg, weight=SEG_WEIGHT)), rtol=1e-5)
     _, weighted = loss(out, t, edge_weight=4.0)

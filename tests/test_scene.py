@@ -54,6 +54,22 @@ def test_snapshot_restore_gives_identical_execution(scene):
     np.testing.assert_array_equal(results[0], results[1])
 
 
+def test_parked_objects_are_hidden_from_the_camera_and_a_restored_one_is_seen_again(scene):
+    from afford.sim.mjcf import HIDDEN_GROUP
+
+    scene.reset([O.upright("cup", 0.0, 0.30)])
+    snap, image = scene.snapshot(), scene.observe()
+    cup0 = scene.model.geom_bodyid == scene.model.body("cup0").id
+    cup1 = scene.model.geom_bodyid == scene.model.body("cup1").id
+    assert np.all(scene.model.geom_group[cup1] == HIDDEN_GROUP)  # parked: not drawn
+    assert np.all(scene.model.geom_group[cup0] != HIDDEN_GROUP)
+    scene.reset([])
+    assert not np.array_equal(scene.observe(), image)  # the cup parked: an empty table
+    scene.restore(snap)  # the cup back on the table by a snapshot, not by reset
+    np.testing.assert_array_equal(scene.observe(), image)
+    assert (scene.instance_mask() == 0).sum() > 50
+
+
 def test_json_round_trip_and_errors(scene, tmp_path):
     scene.reset([O.upright("block", 0, 0.30, 20), O.upright("cup", 0.1, 0.2)])
     specs = scene.specs()

@@ -17,7 +17,7 @@ from afford.sim import camera as cam
 from afford.sim import validate
 from afford.sim.constants import MOTION, PARK_Z, PHYSICS, TABLE
 from afford.sim.kinematics import ArmKinematics
-from afford.sim.mjcf import FINGER_JOINTS, build_mjcf, park_position, slot_names
+from afford.sim.mjcf import FINGER_JOINTS, HIDDEN_GROUP, build_mjcf, park_position, slot_names
 
 # The records live in their own module (sim/specs.py); they are the scene's vocabulary, so
 # `afford.sim.scene` offers them too.
@@ -110,6 +110,11 @@ class Scene:
         self.last_path: np.ndarray | None = None
         self._camera: cam.RGBDCamera | None = None
         self._eq_data0 = self.model.eq_data.copy()
+        # Each geom's slot (-1: not an object's), to hide the parked ones from the camera.
+        slot_of_body = np.full(self.model.nbody, -1)
+        slot_of_body[[self._body[n] for n, _ in self.slots]] = np.arange(len(self.slots))
+        self._geom_slot = slot_of_body[self.model.geom_bodyid]
+        self._geom_group0 = self.model.geom_group.copy()
         self.reset([])
 
     # ------------------------------------------------------------------ set-up
@@ -366,9 +371,15 @@ class Scene:
         return lookup[body]  # -1 (no geom) indexes the last entry, which is -1
 
     def _cam(self) -> cam.RGBDCamera:
-        """The renderer, made on first use (it needs a GL context)."""
+        """The renderer, made on first use (it needs a GL context), with the parked objects
+        hidden from it: they are far out of view, so every image is the same without them, and
+        drawn faster. Which are parked is read from the state now, so a restored snapshot or
+        an object that fell and was parked is seen as it is."""
         if self._camera is None:
             self._camera = cam.RGBDCamera(self.model)
+        parked = self.data.qpos[self._zadr] >= PARK_Z - 1.0
+        hide = (self._geom_slot >= 0) & parked[self._geom_slot]
+        self.model.geom_group[:] = np.where(hide, HIDDEN_GROUP, self._geom_group0)
         return self._camera
 
     def affordances(self):

@@ -319,10 +319,10 @@ def test_a_shard_without_masks_in_a_masked_dataset_is_made_again(tmp_path):
 
 def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     from afford.objects.perception import (
-        HEADS,
         NO_POSTURE,
         PerceptionNet,
         fold_batch_norms,
+        heads_of,
         loss,
         targets,
     )
@@ -338,7 +338,7 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     torch.manual_seed(0)
     net = PerceptionNet(config)
     out = net(images)
-    assert {k: v.shape[1] for k, v in out.items()} == HEADS
+    assert {k: v.shape[1] for k, v in out.items()} == heads_of(config)
     # posture is a class on the pixels of cups, supports and the block, and on no others
     seq = data.sequence(0)
     masks = seq.masks[:1]
@@ -373,7 +373,7 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
 def test_outline_pixels_weigh_more_only_when_asked():
     import torch.nn.functional as F
 
-    from afford.objects.perception import HEADS, NO_POSTURE, SEG_WEIGHT, loss, outlines
+    from afford.objects.perception import NO_POSTURE, SEG_WEIGHT, PerceptionConfig, heads_of, loss, outlines
 
     masks = np.full((1, 6, 6), -1)
     masks[0, 2:4, 1:3] = 0  # a 2 x 2 object beside another
@@ -385,13 +385,83 @@ def test_outline_pixels_weigh_more_only_when_asked():
     seg = torch.from_numpy(np.where(masks >= 0, 1 + (masks > 0), 0))
     t = {"seg": seg, "edge": torch.from_numpy(outlines(masks))}
     # every other head's target at zero, the net's outputs drawn at random, per the heads' sizes
-    t |= {k: torch.zeros(1, c, 6, 6) for k, c in HEADS.items() if k not in ("seg", "posture")}
+    heads = heads_of(PerceptionConfig())
+    t |= {k: torch.zeros(1, c, 6, 6) for k, c in heads.items() if k not in ("seg", "posture")}
     t["posture"] = torch.full((1, 6, 6), NO_POSTURE)
-    out = {k: torch.randn(1, c, 6, 6) for k, c in HEADS.items()}
+    out = {k: torch.randn(1, c, 6, 6) for k, c in heads.items()}
     _, plain = loss(out, t)
     assert np.isclose(plain["seg"], float(F.cross_entropy(out["seg"], seg, weight=SEG_WEIGHT)), rtol=1e-5)
     _, weighted = loss(out, t, edge_weight=4.0)
     assert not np.isclose(weighted["seg"], plain["seg"]) and weighted["heat"] == plain["heat"]
+
+
+def test_a_support_under_the_block_is_a_hidden_object_to_learn_and_to_decode(scene):
+    from scenarios import SUPPORT_TOP
+
+    from afford.data.draws import pose_array
+    from afford.objects.perceive import SeenObject, _hidden_objects
+    from afford.objects.perception import (
+        CHANNELS,
+        HEADS,
+        PRESETS,
+        PerceptionNet,
+        heads_of,
+        loss,
+        targets,
+    )
+    from afford.objects.perception_measure import match_hidden
+    from afford.objects.state import POS_SCALE
+    from afford.sim.camera import world_to_pixel
+    from afford.sim.scene import ObjectSpec as O
+    from afford.training.checkpoint import load_model_state
+
+    scene.reset([O.upright("support", 0.01, 0.30), O.upright("block", 0.0, 0.30, 0.0, z=SUPPORT_TOP)])
+    mask, poses = scene.instance_mask()[None], pose_array(scene)[None]
+    support = [n for n, _ in scene.slots].index("support0")
+    assert not (mask == support).any()  # no pixel of it shows
+    t = targets(mask, poses, np.array([-1]), sigma_px=1.5)
+    col, row = np.floor(world_to_pixel(poses[0, support, :3].astype(float))).astype(int)
+    kind = KINDS.index("support")
+    assert t["hidden"][0, kind, row, col] == 1.0 and t["hidden"][0, kind].sum() > 1  # its peak
+    assert t["hidden"][0, [k for k in range(len(KINDS)) if k != kind]].max() == 0  # the block shows
+    assert t["hidden_at"][0, row, col] == 1 and t["hidden_pose"][0, 0, row, col] == pytest.approx(
+        poses[0, support, 2] * POS_SCALE
+    )
+    # a net with the hidden heads: their outputs, and a loss that falls
+    config = dataclasses.replace(PRESETS["tiny"], hidden=True)
+    torch.manual_seed(0)
+    net = PerceptionNet(config)
+    image = torch.from_numpy(scene.observe().transpose(2, 0, 1)[None].copy())
+    assert {k: v.shape[1] for k, v in net(image).items()} == heads_of(config) == HEADS
+    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
+    first = None
+    for _ in range(20):
+        total, parts = loss(net(image), t)
+        opt.zero_grad()
+        total.backward()
+        opt.step()
+        first = first if first is not None else (parts["hidden"], parts["hidden_pose"])
+    assert parts["hidden"] < first[0] and parts["hidden_pose"] < first[1]
+    # a net without them fine-tunes into one with them: the heads it had are kept
+    plain = PerceptionNet(dataclasses.replace(config, hidden=False))
+    load_model_state(net, {f"model.{k}": v for k, v in plain.state_dict().items()}, "plain")
+    net.eval(), plain.eval()
+    with torch.no_grad():
+        a, b = net(image), plain(image)
+    assert all(torch.equal(a[k], b[k]) for k in b)
+    # decoding: a hidden peak is an object at its pixel and height; one beside a seen object
+    # of its kind is that object
+    pixels = np.zeros((128, 128, sum(HEADS.values())), np.float32)
+    pixels[row, col, CHANNELS["hidden_z"]] = poses[0, support, 2] * POS_SCALE
+    pixels[row, col, CHANNELS["hidden_up"]] = [0, 0, 1]
+    pixels[row, col, CHANNELS["hidden_along"].start] = 1.0  # along x
+    found = _hidden_objects(pixels, np.array([[kind, row, col]]), np.array([0.8]), [])
+    assert len(found) == 1 and found[0].hidden and not found[0].mask.any()
+    np.testing.assert_allclose(found[0].position, poses[0, support, :3], atol=0.004)  # a pixel is 5 mm
+    seen = SeenObject("support", np.array([col + 1.5, row + 0.5]), poses[0, support, :3], *([None] * 3), 0, 1)
+    assert _hidden_objects(pixels, np.array([[kind, row, col]]), np.array([0.8]), [seen]) == []
+    pairs, unseen = match_hidden(found, poses[0], mask[0], held=-1)
+    assert unseen == [support] and pairs == {support: 0}
 
 
 @pytest.mark.parametrize("name", ["upright", "tipped", "lying"])

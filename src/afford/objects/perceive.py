@@ -29,6 +29,7 @@ from afford.sim.camera import FOCAL_PX, SIZE
 from afford.sim.constants import CAMERA
 
 HEAT_CUT = 0.3  # a centre map's peak at least this high is an object
+HIDDEN_CUT = 0.3  # ... and on the hidden heads' maps (PerceptionConfig.hidden)
 ASSIGN_PX = 6.0  # a pixel whose vote lands farther than this from every centre joins none
 MIN_PIXELS = 3  # fewer pixels than this: noise, not an object
 BATCH = 64
@@ -46,6 +47,7 @@ class SeenObject:
     mask: np.ndarray  # (H, W) bool: the pixels it was seen in
     held: float  # probability that the gripper holds it
     score: float  # its centre map's peak
+    hidden: bool = False  # no pixel shows it: where it is was inferred (PerceptionConfig.hidden)
 
     @property
     def posture(self) -> str:
@@ -82,8 +84,13 @@ def perceive(net: PerceptionNet, images: np.ndarray) -> list[list[SeenObject]]:
         kinds = out[:, CHANNELS["seg"]].argmax(1).numpy()
         # (B, H, W, C): an object's pixels' outputs are rows gathered in one step.
         pixels = out.permute(0, 2, 3, 1).numpy()
+        if net.config.hidden:
+            hidden, hidden_scores = centre_peaks(out[:, CHANNELS["hidden"]], HIDDEN_CUT)
         for j in range(len(x)):
-            found.append(_objects(pixels[j], kinds[j], peaks[j], scores[j]))
+            objects = _objects(pixels[j], kinds[j], peaks[j], scores[j])
+            if net.config.hidden:
+                objects += _hidden_objects(pixels[j], hidden[j], hidden_scores[j], objects)
+            found.append(objects)
     return found
 
 
@@ -141,10 +148,7 @@ def _objects(
             if kind != "ball":  # the posture head decides the band; the up axis, the direction
                 up = fit_posture(up, POSTURES[int(mean[CHANNELS["posture"]].argmax())])
             up = up / max(np.linalg.norm(up), 1e-9)
-            product = np.zeros((3, 3))
-            for value, (a, b) in zip(mean[CHANNELS["along"]], AXIS_PAIRS, strict=True):
-                product[a, b] = product[b, a] = value
-            along = np.linalg.eigh(product)[1][:, -1]  # the principal axis of along x along
+            along = _principal(mean[CHANNELS["along"]])
             mask = np.zeros(kind_map.shape, bool)
             mask[r, q] = True
             held = float((1 / (1 + np.exp(-seen[mine][:, CHANNELS["held"]]))).mean())
@@ -161,6 +165,46 @@ def _objects(
                 )
             )
     return objects
+
+
+def _hidden_objects(
+    pixels: np.ndarray, peaks: np.ndarray, scores: np.ndarray, seen: list[SeenObject]
+) -> list[SeenObject]:
+    """One image's objects that no pixel shows, from the hidden heads' peaks (kind, row,
+    column) and the heads' outputs at them; a peak beside an object of its kind that is seen
+    is that object, not another."""
+    objects = []
+    for (k, row, col), score in zip(peaks, scores, strict=True):
+        kind = KINDS[k]
+        pixel = np.array([col + 0.5, row + 0.5])
+        if any(o.kind == kind and np.linalg.norm(o.pixel - pixel) <= ASSIGN_PX for o in seen):
+            continue
+        out = pixels[row, col]
+        up = out[CHANNELS["hidden_up"]]
+        up = up / max(np.linalg.norm(up), 1e-9)
+        z = float(out[CHANNELS["hidden_z"]][0]) / POS_SCALE
+        objects.append(
+            SeenObject(
+                kind,
+                pixel,
+                pixel_world(pixel, z),
+                up,
+                _principal(out[CHANNELS["hidden_along"]]),
+                np.zeros(pixels.shape[:2], bool),
+                0.0,
+                float(score),
+                hidden=True,
+            )
+        )
+    return objects
+
+
+def _principal(products: np.ndarray) -> np.ndarray:
+    """The long axis from the six entries of its outer product with itself (AXIS_PAIRS)."""
+    product = np.zeros((3, 3))
+    for value, (a, b) in zip(products, AXIS_PAIRS, strict=True):
+        product[a, b] = product[b, a] = value
+    return np.linalg.eigh(product)[1][:, -1]
 
 
 def by_slot(objects: list[SeenObject]) -> list[SeenObject | None]:

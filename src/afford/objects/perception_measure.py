@@ -3,7 +3,8 @@
 An object is visible when at least `VISIBLE_PX` pixels of the image show it (a ball inside a
 cup is not). Perceived and visible objects are matched greedily, nearest first, within
 `MATCH_PX` of the true centre's projection, whatever their kinds; then the measures are read
-off the matched pairs.
+off the matched pairs. A net with the hidden heads also names objects no pixel shows; those
+are matched the same way, apart, to the true objects that are not visible (and not held).
 """
 
 from __future__ import annotations
@@ -27,27 +28,50 @@ SPEED_BATCH = 256
 def match(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray) -> dict[int, int]:
     """{true slot: index in objects} for the visible slots matched, nearest pairs first."""
     visible = [s for s in range(N_SLOTS) if not np.isnan(poses[s, 0]) and (mask == s).sum() >= VISIBLE_PX]
-    if not objects or not visible:
+    return _nearest(objects, [j for j, o in enumerate(objects) if not o.hidden], poses, visible)
+
+
+def match_hidden(
+    objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray, held: int
+) -> tuple[dict[int, int], list[int]]:
+    """The objects said to be hidden matched to the true ones not visible: {true slot: index
+    in objects}, and the slots not visible."""
+    unseen = [
+        s
+        for s in range(N_SLOTS)
+        if not np.isnan(poses[s, 0]) and s != held and (mask == s).sum() < VISIBLE_PX
+    ]
+    return _nearest(objects, [j for j, o in enumerate(objects) if o.hidden], poses, unseen), unseen
+
+
+def _nearest(
+    objects: list[SeenObject], which: list[int], poses: np.ndarray, slots: list[int]
+) -> dict[int, int]:
+    """{slot: index in objects} pairing `slots` with the objects at `which`, nearest first."""
+    if not which or not slots:
         return {}
-    true_px = world_to_pixel(poses[visible, :3].astype(float))
-    seen_px = np.array([o.pixel for o in objects])
+    true_px = world_to_pixel(poses[slots, :3].astype(float))
+    seen_px = np.array([objects[j].pixel for j in which])
     d = np.linalg.norm(true_px[:, None] - seen_px[None], axis=-1)
     pairs: dict[int, int] = {}
     for flat in np.argsort(d, axis=None):
         i, j = np.unravel_index(flat, d.shape)
         if d[i, j] > MATCH_PX:
             break
-        if visible[i] not in pairs and j not in pairs.values():
-            pairs[visible[i]] = int(j)
+        if slots[i] not in pairs and which[j] not in pairs.values():
+            pairs[slots[i]] = which[j]
     return pairs
 
 
-def aligned_state(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, int]:
+def aligned_state(
+    objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray, true_held: int
+) -> tuple[np.ndarray, int]:
     """Perceived objects as a state whose slots are those of the true objects they match: the
     dynamics measured from perceived states are scored object by object against the truth."""
     out = np.full((N_SLOTS, 7), np.nan, np.float32)
     held, best = -1, 0.5
-    for slot, j in match(objects, poses, mask).items():
+    pairs = match(objects, poses, mask) | match_hidden(objects, poses, mask, true_held)[0]
+    for slot, j in pairs.items():
         out[slot] = np.concatenate([objects[j].position, objects[j].quat])
         if objects[j].held > best:
             held, best = slot, objects[j].held
@@ -72,7 +96,7 @@ def perceived_starts(net: PerceptionNet, data: Dataset, t) -> tuple[np.ndarray, 
                 raise DataError(
                     f"{data.root}: no instance masks, needed to match perceived objects to true ones"
                 )
-            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k])
+            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k], int(s.held[k]))
     return before, held
 
 
@@ -87,6 +111,8 @@ def measure_perception(
     # Per true posture and per kind: where the shares above are lost.
     by_posture = {name: [0, 0] for name in ("upright", "tipped", "lying")}
     by_kind = {kind: [0, 0] for kind in KINDS}
+    hidden_n = hidden_found = hidden_said = 0
+    hidden_mm: list[float] = []
     seconds = 0.0
     for start in range(0, len(items), SPEED_BATCH):
         chunk = items[start : start + SPEED_BATCH]
@@ -104,7 +130,14 @@ def measure_perception(
                 by_kind[KINDS[SLOT_KIND[k]]][0] += 1
                 by_kind[KINDS[SLOT_KIND[k]]][1] += k in pairs
             found += len(pairs)
-            spurious += len(objects) - len(pairs)
+            spurious += sum(not o.hidden for o in objects) - len(pairs)
+            inferred, unseen = match_hidden(objects, poses, mask, int(s.held[t]))
+            hidden_n += len(unseen)
+            hidden_found += len(inferred)
+            hidden_said += sum(o.hidden for o in objects)
+            hidden_mm += [
+                float(np.linalg.norm(objects[j].position - poses[k, :3])) * 1000 for k, j in inferred.items()
+            ]
             held_seen = -1
             for slot, j in pairs.items():
                 o = objects[j]
@@ -147,6 +180,11 @@ def measure_perception(
         "mask_iou_mean": float(np.mean(ious)) if ious else None,
         "held_right": held_right / max(len(items), 1),
         "images_per_second": len(items) / seconds if seconds else None,
+        # objects not visible (fewer than VISIBLE_PX pixels, not held), and the hidden heads'
+        "not_visible_objects": hidden_n,
+        "hidden_found": hidden_found / max(hidden_n, 1),
+        "hidden_position_median_mm": float(np.median(hidden_mm)) if hidden_mm else None,
+        "hidden_spurious_per_image": (hidden_said - hidden_found) / max(len(items), 1),
     }
 
 
@@ -172,5 +210,9 @@ def perception_table(r: dict) -> str:
         ("mask IoU (mean)", f("mask_iou_mean", 4)),
         ("held object right", f("held_right", 4)),
         ("images / s (batches of 256)", f("images_per_second", 0)),
+        (f"objects not visible (n {r['not_visible_objects']})", ""),
+        ("  found by the hidden heads", f("hidden_found", 4)),
+        ("  position median (mm, 3D)", f("hidden_position_median_mm", 1)),
+        ("  spurious hidden per image", f("hidden_spurious_per_image", 3)),
     ]
     return "\n".join(f"{k:32s} {v}" for k, v in rows)

@@ -449,6 +449,17 @@ def test_a_support_under_the_block_is_a_hidden_object_to_learn_and_to_decode(sce
     with torch.no_grad():
         a, b = net(image), plain(image)
     assert all(torch.equal(a[k], b[k]) for k in b)
+    # with hidden_trains_trunk off, the hidden heads' loss leaves the features they read alone
+    apart = PerceptionNet(dataclasses.replace(config, hidden_trains_trunk=False))
+    load_model_state(apart, {f"model.{k}": v for k, v in plain.state_dict().items()}, "plain")
+    with torch.no_grad():
+        apart.hidden_head.weight.normal_()  # as after some training: gradients flow back
+    for m in (apart, plain):
+        m.train()
+        m.zero_grad()
+        loss(m(image), t)[0].backward()
+    assert torch.allclose(apart.stem[0].weight.grad, plain.stem[0].weight.grad)
+    assert apart.hidden_head.weight.grad.abs().sum() > 0
     # decoding: a hidden peak is an object at its pixel and height; one beside a seen object
     # of its kind is that object
     pixels = np.zeros((128, 128, sum(HEADS.values())), np.float32)

@@ -80,6 +80,9 @@ class PerceptionConfig:
     edge_weight: float = 1.0
     # Also the objects that no pixel shows (HIDDEN_HEADS); False is the shipped net's.
     hidden: bool = False
+    # Whether the hidden heads' losses also train the features they read; False: the heads
+    # learn alone and every other head trains as without them (docs/experiments/objects-hidden.md).
+    hidden_trains_trunk: bool = True
     # training
     steps: int = 8000
     batch: int = 16
@@ -211,7 +214,7 @@ class PerceptionNet(nn.Module):
         out = self.head(self.refine(torch.cat([x, full], 1)))
         if self.hidden_head is None:
             return out
-        return torch.cat([out, self.hidden_head(x)], 1)
+        return torch.cat([out, self.hidden_head(x if self.config.hidden_trains_trunk else x.detach())], 1)
 
 
 # ---------------------------------------------------------------------------- targets

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -28,7 +29,13 @@ from afford.metrics import matches
 from afford.objects.draw import Drawer
 from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.state import KINDS, SLOT_KIND, moved
-from afford.shipped import load_learned, load_object_dynamics, load_object_perception
+from afford.shipped import (
+    DYNAMICS_FILE,
+    PERCEPTION_FILE,
+    load_learned,
+    load_object_dynamics,
+    load_object_perception,
+)
 from afford.sim.affordance import decode_affordance
 
 STILL_M = 0.002  # an object that moved less than this in the step stayed
@@ -92,6 +99,8 @@ def main() -> None:
     parser.add_argument("--objects", metavar="DIR", help="object nets (else the shipped)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
+    if args.objects and not any((Path(args.objects) / n).is_file() for n in (PERCEPTION_FILE, DYNAMICS_FILE)):
+        parser.error(f"{args.objects}: holds neither {PERCEPTION_FILE} nor {DYNAMICS_FILE}")
     r = misses(Dataset(args.data), args.split, args.objects)
     if args.json:
         print(json.dumps(r, indent=2))

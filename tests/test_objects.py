@@ -399,7 +399,7 @@ def test_a_support_under_the_block_is_a_hidden_object_to_learn_and_to_decode(sce
     from scenarios import SUPPORT_TOP
 
     from afford.data.draws import pose_array
-    from afford.objects.perceive import SeenObject, _hidden_objects
+    from afford.objects.perceive import SeenObject, _hidden_objects, by_slot
     from afford.objects.perception import (
         CHANNELS,
         HEADS,
@@ -473,6 +473,9 @@ def test_a_support_under_the_block_is_a_hidden_object_to_learn_and_to_decode(sce
     assert _hidden_objects(pixels, np.array([[kind, row, col]]), np.array([0.8]), [seen]) == []
     pairs, unseen = match_hidden(found, poses[0], mask[0], held=-1)
     assert unseen == [support] and pairs == {support: 0}
+    # a guess at a hidden support never takes the slot of a support that shows
+    shown = [dataclasses.replace(found[0], hidden=False, score=0.3 + k / 10) for k in range(2)]
+    assert all(o is None or not o.hidden for o in by_slot([dataclasses.replace(found[0], score=0.9), *shown]))
 
 
 @pytest.mark.parametrize("name", ["upright", "tipped", "lying"])

@@ -63,6 +63,8 @@ def test_parked_objects_are_hidden_from_the_camera_and_a_restored_one_is_seen_ag
     cup1 = scene.model.geom_bodyid == scene.model.body("cup1").id
     assert np.all(scene.model.geom_group[cup1] == HIDDEN_GROUP)  # parked: not drawn
     assert np.all(scene.model.geom_group[cup0] != HIDDEN_GROUP)
+    scene.model.geom_group[:] = scene._geom_group0  # every slot drawn, the parked ones too
+    np.testing.assert_array_equal(scene._camera.render(scene.data), image)  # out of view: the same
     scene.reset([])
     assert not np.array_equal(scene.observe(), image)  # the cup parked: an empty table
     scene.restore(snap)  # the cup back on the table by a snapshot, not by reset

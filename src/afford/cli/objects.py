@@ -334,7 +334,8 @@ def add_eval_parser(esub) -> None:
         "`afford generate --masks`) and report: the share of visible objects (20 pixels or more) found, "
         "spurious objects per image, kind right, centre error in the image (median, 95th percentile) "
         "and in 3D, upright / tipped / lying right, the block's tilt, mask IoU, the held object right, "
-        "and images per second.",
+        "and images per second; for a net with the hidden heads (`--set hidden=true`), the share of "
+        "the objects no pixel shows that they find, how far off, and their phantoms per image.",
     )
     q.add_argument("--weights", required=True, metavar="FILE", help="a perception checkpoint or weights file")
     q.add_argument("--data", required=True, metavar="DIR")

@@ -213,7 +213,8 @@ def by_slot(objects: list[SeenObject]) -> list[SeenObject | None]:
     which goes where is free."""
     slots: list[SeenObject | None] = [None] * N_SLOTS
     for k, kind in enumerate(KINDS):
-        mine = sorted((o for o in objects if o.kind == kind), key=lambda o: -o.score)
+        # seen objects first: a guess at a hidden one never takes the slot of one that shows
+        mine = sorted((o for o in objects if o.kind == kind), key=lambda o: (o.hidden, -o.score))
         for slot, o in zip(np.flatnonzero(SLOT_KIND == k), mine, strict=False):
             slots[slot] = o
     return slots

@@ -80,8 +80,9 @@ class PerceptionConfig:
     edge_weight: float = 1.0
     # Also the objects that no pixel shows (HIDDEN_HEADS); False is the shipped net's.
     hidden: bool = False
-    # Whether the hidden heads' losses also train the features they read; False: the heads
-    # learn alone and every other head trains as without them (docs/experiments/objects-hidden.md).
+    # Whether the hidden heads' losses also train the features they read. False stops their
+    # gradient at the heads, so it does not shape the features the other heads use; the clipping
+    # of the gradient's norm and the best checkpoint's validation loss still count them.
     hidden_trains_trunk: bool = True
     # training
     steps: int = 8000

@@ -4,7 +4,8 @@ An object is visible when at least `VISIBLE_PX` pixels of the image show it (a b
 cup is not). Perceived and visible objects are matched greedily, nearest first, within
 `MATCH_PX` of the true centre's projection, whatever their kinds; then the measures are read
 off the matched pairs. A net with the hidden heads also names objects no pixel shows; those
-are matched the same way, apart, to the true objects that are not visible (and not held).
+are matched the same way, apart, to the true objects no pixel shows (and not held), as the
+heads learn them. An object that shows 1 to `VISIBLE_PX` - 1 pixels is in neither count.
 """
 
 from __future__ import annotations
@@ -34,13 +35,9 @@ def match(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray) -> dic
 def match_hidden(
     objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray, held: int
 ) -> tuple[dict[int, int], list[int]]:
-    """The objects said to be hidden matched to the true ones not visible: {true slot: index
-    in objects}, and the slots not visible."""
-    unseen = [
-        s
-        for s in range(N_SLOTS)
-        if not np.isnan(poses[s, 0]) and s != held and (mask == s).sum() < VISIBLE_PX
-    ]
+    """The objects said to be hidden matched to the true ones no pixel shows: {true slot: index
+    in objects}, and those slots."""
+    unseen = [s for s in range(N_SLOTS) if not np.isnan(poses[s, 0]) and s != held and not (mask == s).any()]
     return _nearest(objects, [j for j, o in enumerate(objects) if o.hidden], poses, unseen), unseen
 
 
@@ -180,11 +177,13 @@ def measure_perception(
         "mask_iou_mean": float(np.mean(ious)) if ious else None,
         "held_right": held_right / max(len(items), 1),
         "images_per_second": len(items) / seconds if seconds else None,
-        # objects not visible (fewer than VISIBLE_PX pixels, not held), and the hidden heads'
-        "not_visible_objects": hidden_n,
-        "hidden_found": hidden_found / max(hidden_n, 1),
+        # objects no pixel shows (not held), and what the hidden heads make of them
+        "hidden_objects": hidden_n,
+        "hidden_found": hidden_found / max(hidden_n, 1) if net.config.hidden else None,
         "hidden_position_median_mm": float(np.median(hidden_mm)) if hidden_mm else None,
-        "hidden_spurious_per_image": (hidden_said - hidden_found) / max(len(items), 1),
+        "hidden_spurious_per_image": (hidden_said - hidden_found) / max(len(items), 1)
+        if net.config.hidden
+        else None,
     }
 
 
@@ -210,7 +209,7 @@ def perception_table(r: dict) -> str:
         ("mask IoU (mean)", f("mask_iou_mean", 4)),
         ("held object right", f("held_right", 4)),
         ("images / s (batches of 256)", f("images_per_second", 0)),
-        (f"objects not visible (n {r['not_visible_objects']})", ""),
+        (f"objects no pixel shows (n {r['hidden_objects']})", ""),
         ("  found by the hidden heads", f("hidden_found", 4)),
         ("  position median (mm, 3D)", f("hidden_position_median_mm", 1)),
         ("  spurious hidden per image", f("hidden_spurious_per_image", 3)),

@@ -183,19 +183,10 @@ def _hidden_objects(
         up = out[CHANNELS["hidden_up"]]
         up = up / max(np.linalg.norm(up), 1e-9)
         z = float(out[CHANNELS["hidden_z"]][0]) / POS_SCALE
-        objects.append(
-            SeenObject(
-                kind,
-                pixel,
-                pixel_world(pixel, z),
-                up,
-                _principal(out[CHANNELS["hidden_along"]]),
-                np.zeros(pixels.shape[:2], bool),
-                0.0,
-                float(score),
-                hidden=True,
-            )
-        )
+        along = _principal(out[CHANNELS["hidden_along"]])
+        where = pixel_world(pixel, z)
+        no_pixels = np.zeros(pixels.shape[:2], bool)
+        objects.append(SeenObject(kind, pixel, where, up, along, no_pixels, 0.0, float(score), hidden=True))
     return objects
 
 

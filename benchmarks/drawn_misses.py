@@ -3,13 +3,14 @@
     python benchmarks/drawn_misses.py [--data data/part] [--split test] [--objects DIR] [--json]
 
 Each run of the split is started from its first image (perceived), moved one step by the
-dynamics (the likeliest outcome, rested) and drawn, as `afford eval prediction --objects`
-does; the recognition net runs on the drawn state and on the true one. Every affordance of the
-true next state that is found on the true image and not on the drawn one is put down to the
-object it belongs to (the true object nearest it over the table), by the action of the step,
-whether that object moved in the step and its kind, with how far the dynamics put it from where
-it went (the nearest predicted object of its kind). It says which stage loses the affordances
-that recognition on drawn states misses: where the objects were drawn, or how.
+dynamics (the likeliest outcome, rested) and drawn by the rollout that `afford eval prediction
+--objects` measures (`objects/rollout.py`); the recognition net runs on the drawn state and on
+the true one. Every affordance of the true next state that is found on the true image and not
+on the drawn one is put down to the object it belongs to (the true object nearest it over the
+table), by the action of the step, whether that object moved in the step and its kind, with how
+far the dynamics put it from where it went (the nearest predicted object of its kind). It says
+which stage loses the affordances that recognition on drawn states misses: where the objects
+were drawn, or how.
 """
 
 from __future__ import annotations
@@ -24,11 +25,9 @@ import torch
 
 from afford.data.format import Dataset
 from afford.data.torch_data import PredictionData, collate_prediction
-from afford.images import to_hwc
 from afford.metrics import matches
-from afford.objects.draw import Drawer
-from afford.objects.perceive import perceive, slot_masks, to_state
-from afford.objects.state import KINDS, SLOT_KIND, moved
+from afford.objects.rollout import ObjectRollout
+from afford.objects.state import KINDS, SLOT_KIND
 from afford.shipped import (
     DYNAMICS_FILE,
     PERCEPTION_FILE,
@@ -42,28 +41,19 @@ STILL_M = 0.002  # an object that moved less than this in the step stayed
 
 
 def misses(data: Dataset, split: str, objects: str | None) -> dict:
-    perception = load_object_perception(objects, fallback=True)
-    dynamics = load_object_dynamics(objects, fallback=True)
+    world = ObjectRollout(
+        load_object_perception(objects, fallback=True), load_object_dynamics(objects, fallback=True)
+    )
     recognise = load_learned().recognizer
-    drawer = Drawer()
     runs = PredictionData(data, split, max_steps=1, random_start=False)
     groups: dict[str, list[float]] = defaultdict(list)
     found = {"drawn": 0, "true": 0, "total": 0}
     for k in range(len(runs)):
         images, actions, _ = collate_prediction([runs[k]])
         seq = data.sequence(runs.indices[k])
-        start, truth = to_hwc(images[:, 0])[0], to_hwc(images[:, 1])[0]
-        seen = perceive(perception, start[None])[0]
-        poses, held = to_state(seen)
-        outcomes = dynamics.outcomes(poses[None], np.array([held]), actions[:, 0].numpy())
-        after, held_after = outcomes.likeliest()
-        go = moved(poses[None], after)[0]
-        after = drawer.rest(after[0], int(held_after[0]), go)
-        masks = slot_masks(seen)
-        drawn = drawer.draw(
-            start, drawer.render(poses, held), drawer.render(after, int(held_after[0])), masks[go].any(0)
-        )
-        on_drawn, on_true = recognise(torch.from_numpy(np.stack([drawn, truth]).transpose(0, 3, 1, 2).copy()))
+        drawn, after = world.roll(images[:, 0], actions)
+        after = after[0, 0]
+        on_drawn, on_true = recognise(torch.cat([drawn[:, 0], images[:, 1]]))
         action = decode_affordance(actions[0, 0].numpy()).type
         before, went = seq.poses[0], seq.poses[1]
         present = [s for s in range(len(went)) if not np.isnan(went[s, 0])]

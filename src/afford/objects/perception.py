@@ -244,13 +244,8 @@ def targets(
         for slot in range(poses.shape[1]):
             if np.isnan(poses[i, slot, 0]) or slot in shown or slot == held[i]:
                 continue
-            kind = SLOT_KIND[slot]
             centre = world_to_pixel(poses[i, slot, :3].astype(float))
-            near = np.exp(-((px[0] - centre[0]) ** 2 + (px[1] - centre[1]) ** 2) / (2 * sigma_px**2))
-            hidden[i, kind] = np.maximum(hidden[i, kind], near)
-            col, row = np.floor(centre).astype(int)
-            if 0 <= row < SIZE and 0 <= col < SIZE:
-                hidden[i, kind, row, col] = 1.0
+            near = _mark_centre(hidden[i, SLOT_KIND[slot]], centre, px, sigma_px)
             u, a = quat_axes(poses[i, slot, 3:7].astype(float))
             pose = np.concatenate([[poses[i, slot, 2] * POS_SCALE], u, [a[p] * a[q] for p, q in AXIS_PAIRS]])
             # Its pose is read at its centre's pixel; the pixels around it learn it too.
@@ -265,11 +260,7 @@ def targets(
             kind = SLOT_KIND[slot]
             centre = world_to_pixel(poses[i, slot, :3].astype(float))
             seg[i][where] = kind + 1
-            d2 = (px[0] - centre[0]) ** 2 + (px[1] - centre[1]) ** 2
-            heat[i, kind] = np.maximum(heat[i, kind], np.exp(-d2 / (2 * sigma_px**2)))
-            # The pixel holding the centre is the peak, whatever fraction of a pixel it is off.
-            col, row = np.clip(np.floor(centre).astype(int), 0, SIZE - 1)
-            heat[i, kind, row, col] = 1.0
+            _mark_centre(heat[i, kind], centre, px, sigma_px)
             offset[i][:, where] = (centre[:, None] - px[:, where]) / OFFSET_SCALE
             z[i, 0][where] = poses[i, slot, 2] * POS_SCALE
             u, a = quat_axes(poses[i, slot, 3:7].astype(float))
@@ -293,6 +284,17 @@ def targets(
         "hidden_pose": t(hidden_pose),
         "hidden_at": t(hidden_at),
     }
+
+
+def _mark_centre(heat: np.ndarray, centre: np.ndarray, px: np.ndarray, sigma_px: float) -> np.ndarray:
+    """Draw an object's centre into a centre map (H, W) in place: a Gaussian around it, kept
+    where it is higher than what the map holds, and 1 at the pixel holding the centre, the peak
+    whatever fraction of a pixel it is off. Returns the Gaussian."""
+    near = np.exp(-((px[0] - centre[0]) ** 2 + (px[1] - centre[1]) ** 2) / (2 * sigma_px**2))
+    np.maximum(heat, near, out=heat)
+    col, row = np.clip(np.floor(centre).astype(int), 0, SIZE - 1)
+    heat[row, col] = 1.0
+    return near
 
 
 def outlines(masks: np.ndarray) -> np.ndarray:

@@ -25,8 +25,13 @@ class ObjectRollout:
         self.perception, self.dynamics = perception, dynamics
         self.drawer = drawer if drawer is not None else Drawer()
 
-    @torch.no_grad()
     def rollout(self, images: torch.Tensor, actions: torch.Tensor, steps=None) -> torch.Tensor:
+        return self.roll(images, actions)[0]
+
+    @torch.no_grad()
+    def roll(self, images: torch.Tensor, actions: torch.Tensor) -> tuple[torch.Tensor, np.ndarray]:
+        """The predicted images (B, L, 4, H, W), and the objects drawn in them: pose rows
+        (B, L, slots, 7) in the slots perception filled (NaN: none)."""
         start = to_hwc(images)
         rows = actions.numpy()
         b, length = rows.shape[:2]
@@ -39,15 +44,17 @@ class ObjectRollout:
         drawn = [self.drawer.render(poses[k], int(held[k])) for k in range(b)]
         image = list(start)
         out = np.zeros((b, length, *start.shape[1:]), np.float32)
+        drawn_poses = np.zeros((b, length, *poses.shape[1:]), np.float32)
         for t in range(length):
             before = poses
             poses, held = self.dynamics.outcomes(poses, held, rows[:, t]).likeliest()
             go = moved(before, poses)
             poses = np.stack([self.drawer.rest(poses[k], int(held[k]), go[k]) for k in range(b)])
+            drawn_poses[:, t] = poses
             for k in range(b):
                 after = self.drawer.render(poses[k], int(held[k]))
                 image[k] = self.drawer.draw(image[k], drawn[k], after, masks[k][go[k] & as_seen[k]].any(0))
                 drawn[k] = after
                 out[k, t] = image[k]
             as_seen &= ~go
-        return to_chw(out)
+        return to_chw(out), drawn_poses

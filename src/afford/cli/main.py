@@ -38,6 +38,13 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as e:
         print(f"afford: error: {e}", file=sys.stderr)
         return 2
+    except OSError as e:
+        if e.filename is None:
+            raise  # not a path the user named: a bug, with its traceback
+        # A path given on the command line that cannot be read or written (a folder that is a
+        # file, no permission, a full disk): the user's to fix, so one line.
+        print(f"afford: error: {e.filename}: {e.strerror.lower()}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("afford: interrupted", file=sys.stderr)  # one line, not a traceback
         return 130

@@ -62,6 +62,19 @@ def objects_folder(args) -> str | None:
     return str(path)
 
 
+def output_folder(path):
+    """The folder an --out names, made if missing; one line where it cannot be, checked before any
+    work whose results it would hold."""
+    from pathlib import Path
+
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise CLIError(f"--out {path}: {e.strerror.lower()}") from None
+    return out
+
+
 def nets_folder(args) -> str | None:
     """The weights folder a planning command asked for: `--weights`, or with `--optimise-turns`
     alone the shipped continuous-turn prediction net's (paper V); None: the shipped nets."""

@@ -20,6 +20,7 @@ from afford.cli.options import (
     load_nets,
     nets_folder,
     objects_folder,
+    output_folder,
     planner_config,
 )
 from afford.cli.options import perturbation as perturbation_of
@@ -50,14 +51,13 @@ def cmd_plan(args) -> int:
             raise CLIError("--goal goes with --scene; a task file holds its own goal")
         task = load_task(args.task, scene)
     bind_weights(task.goal, args.weights)
+    out = output_folder(args.out)
     perturbation = perturbation_of(args)
     learned = load_nets(nets_folder(args)) if args.planner in USES_NETS else None
     config = planner_config(args, progress=not args.json)
     outcome = solve(task, args.planner, scene, config, learned)
     if perturbation is not None:
         execute_perturbed(outcome, task, scene, perturbation, args.executions, config=config, learned=learned)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     picture = out / f"{task.name}-{args.planner}.png"
     plan_strip(outcome, task.goal, picture)
     record = outcome.to_dict() | {"picture": str(picture)}

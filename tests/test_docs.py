@@ -253,6 +253,57 @@ def test_no_page_or_source_names_a_step_of_the_works_history():
     assert not found, found
 
 
+# The pages say what is: words that tell how it was, beside the history words above. Pages
+# only: the sources use some of them as the grammar's words ("no longer on the table"). Whole
+# words ("known" is not "now"); "used to" after a form of "be" is a purpose ("is used to train").
+PAGE_HISTORY = re.compile(
+    r"\bnow\b|(?<!\bis )(?<!\bare )(?<!\bwas )(?<!\bwere )(?<!\bbe )(?<!\bbeen )\bused to\b"
+    r"|\bno longer\b|\bshipped before\b",
+    re.I,
+)
+DATE = re.compile(r"\b20\d\d-\d\d-\d\d\b")
+COMMIT = re.compile(r"\bcommits? [0-9a-f]{7,40}\b")
+
+
+def history_words(text: str) -> list[str]:
+    return [m.group(0) for m in PAGE_HISTORY.finditer(text)]
+
+
+def undated_dates(text: str) -> list[str]:
+    """Dates in a paragraph that names no commit: a date belongs only beside the commit a
+    measurement was recorded at."""
+    return [d for para in re.split(r"\n\s*\n", text) if not COMMIT.search(para) for d in DATE.findall(para)]
+
+
+def test_no_page_says_how_it_was():
+    found = [
+        f"{page.relative_to(ROOT)}: {word!r}"
+        for page in PAGES
+        for word in history_words(page.read_text()) + undated_dates(page.read_text())
+    ]
+    assert not found, found
+
+
+def test_the_history_words_are_whole_words():
+    planted = (
+        "It now plans. It used to grow. It is no longer here. The net shipped before it. "
+        "A known fix; nowhere; the snow. The data is used to train it. Measured 2026-12-01."
+    )
+    assert history_words(planted) == ["now", "used to", "no longer", "shipped before"]
+    assert undated_dates(planted) == ["2026-12-01"]
+    assert undated_dates("Recorded 2026-12-01 at commit 0fa098e.") == []
+
+
+README_AND_DOCS_MAX_LINES = 3000
+
+
+def test_the_readme_and_docs_are_a_read_one_finishes():
+    lines = sum(len(page.read_text().splitlines()) for page in PAGES)
+    assert lines <= README_AND_DOCS_MAX_LINES, (
+        f"README.md and docs/ hold {lines} lines, over {README_AND_DOCS_MAX_LINES}: cut before adding"
+    )
+
+
 # ------------------------------------------------------------------ README's figures are the pages'
 def section(page: Path, anchor: str) -> str:
     """The text under the heading with GitHub anchor `anchor`, up to the next one of its level or above."""

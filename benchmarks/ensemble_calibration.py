@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import replace
 from pathlib import Path
 
 DISAGREE = 1e-3  # a pixel's spread above which the members count as disagreeing there
@@ -55,11 +54,7 @@ def main() -> None:
     val = calibrate(members, data, "val", limit=args.runs)
     cal = calibrate(members, data, "test", limit=args.runs)
     scale = val.fitted_scale()
-    trained_scale = members[0].config.model.variance_scale  # already in the members' variance
     what = "members' spread"
-    if any(m.config.model.variance for m in members):  # the spread panels show the state's whole std
-        cal = replace(cal, spread=np.sqrt(cal.variance), pixel_spread=np.sqrt(cal.pixel_variance))
-        what = "predicted std (variance heads and spread)"
     live = cal.pixel_spread > DISAGREE
     report = {
         "members": len(members),
@@ -72,7 +67,6 @@ def main() -> None:
         "error_over_spread": round(float(cal.error.mean() / cal.spread.mean()), 2),
         "by_spread": cal.by_spread(5),
         "variance": {
-            "scale_in_weights": trained_scale,
             "val_ratio": round(val.ratio(), 3),
             "fitted_scale": round(scale, 4),
             "test_ratio": round(cal.ratio(), 3),

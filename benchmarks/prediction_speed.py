@@ -1,11 +1,11 @@
-"""Prediction training speed: batches/s per preset, where a training step's time goes, bf16.
+"""Prediction training speed: batches/s per preset, where a training step's time goes.
 
     python benchmarks/prediction_speed.py [--threads 2] [--data data/cpu] [--json]
 
 Batches of 32 runs with the default dataset's mix of lengths (about 2.3 real steps of 4 on
 average, padded steps not run), random images unless --data is given. The profile splits one
 training step into building the batch (from --data: decode, augment, pad), the forward pass,
-the backward pass and the optimiser. bf16 is the cpu preset under bfloat16 autocast.
+the backward pass and the optimiser.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ import torch
 from afford.prediction.config import PRESETS
 from afford.prediction.model import PredictionNet
 from afford.prediction.train import make_optimizer, sequence_loss
-from afford.training.fields import with_fields
 from afford.training.memory import keep_freed_memory
 
 PAPER_BATCHES = 1_000_000
@@ -101,7 +100,6 @@ def main() -> None:
     result = {"threads": args.threads, "keep_freed_memory": not args.no_keep_memory}
     cases = {
         "cpu": PRESETS["cpu"],
-        "cpu bf16": with_fields(PRESETS["cpu"], bf16=True),
         "dense-cpu": PRESETS["dense-cpu"],
         "paper": PRESETS["paper"],
     }

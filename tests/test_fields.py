@@ -74,3 +74,27 @@ def test_a_name_no_field_goes_by_is_refused():
         with_fields(TWO, l1=2.0)
     with pytest.raises(TypeError, match="two fields go by the name 'lr'"):
         paths(_Clash)
+
+
+def test_a_stored_field_this_code_does_not_vary_loads_at_its_value_and_refuses_any_other():
+    """Shipped files store fields whose experiments left the code (PredictionConfig.removed):
+    at the one value the code runs they load as before; another value is a net this afford
+    cannot build or train as it was, and says so."""
+    stored = {"variance": False, "fork_blocks": 1, "choice_head": "pooled", "lr": 1e-4}
+    assert from_dict(PredictionConfig, stored) == with_fields(PredictionConfig(), lr=1e-4)
+    assert from_dict(PredictionConfig, {"loss": {"nll": 0.0, "l1": 0.5}}).loss.l1 == 0.5
+    for asks in ({"variance": True}, {"loss": {"nll": 1.0}}, {"choice_head": "grid"}, {"trained": "side"}):
+        with pytest.raises(ValueError, match="does not hold"):
+            from_dict(PredictionConfig, asks)
+
+
+def test_a_checkpoint_asking_for_a_removed_feature_is_a_one_line_error(tmp_path):
+    from afford.errors import UserError
+    from afford.prediction.evaluate import load_net
+    from afford.prediction.model import PredictionNet
+    from afford.training.checkpoint import save_checkpoint
+
+    stored = {**_legacy(PRESETS["tiny"]), "variance": True}
+    save_checkpoint(tmp_path / "net.safetensors", PredictionNet(PRESETS["tiny"]), "prediction", stored, 0)
+    with pytest.raises(UserError, match="variance=True"):
+        load_net(tmp_path / "net.safetensors")

@@ -11,11 +11,11 @@ from afford.training.overrides import OverrideError, apply_overrides
 
 def test_values_take_the_fields_types():
     c = apply_overrides(
-        PREDICTION["cpu"], ["lr=3e-4", "repair=true", "steps=10", "encoder_channels=8, 16,16"]
+        PREDICTION["cpu"], ["lr=3e-4", "angle_flip=false", "steps=10", "encoder_channels=8, 16,16"]
     )
-    assert (c.training.lr, c.loss.repair, c.training.steps, c.model.encoder_channels) == (
+    assert (c.training.lr, c.sampling.angle_flip, c.training.steps, c.model.encoder_channels) == (
         3e-4,
-        True,
+        False,
         10,
         (8, 16, 16),
     )
@@ -24,7 +24,7 @@ def test_values_take_the_fields_types():
     assert apply_overrides(RECOGNITION["cpu"], None) is RECOGNITION["cpu"]
 
 
-@pytest.mark.parametrize("pair", ["nope=1", "lr", "steps=ten", "repair=maybe"])
+@pytest.mark.parametrize("pair", ["nope=1", "lr", "steps=ten", "angle_flip=maybe"])
 def test_bad_overrides_name_the_problem(pair):
     with pytest.raises(OverrideError, match="--set"):
         apply_overrides(PREDICTION["cpu"], [pair])

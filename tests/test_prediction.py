@@ -14,7 +14,7 @@ from afford.prediction.model import (
     clamped_tanh,
     normalise_latent,
 )
-from afford.prediction.train import change_mask, sequence_loss
+from afford.prediction.train import sequence_loss
 from afford.sim import camera
 from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
@@ -147,18 +147,6 @@ def test_loss_falls_on_a_tiny_batch(preset):
         opt.step()
         losses.append(float(loss.detach()))
     assert losses[-1] < 0.5 * losses[0]
-
-
-def test_repair_targets_the_errors_a_step_inherits():
-    images = torch.zeros(1, 3, 4, 8, 8)
-    images[:, 1:, :, 0, 0] = 1.0  # the first action changes pixel (0, 0); the second nothing
-    predicted = images[:, 1:].clone()  # the change drawn right...
-    predicted[:, :, :, 5, 5] = 0.5  # ...and a ghost drawn at step 1 and kept
-    plain, repair = change_mask(images, predicted, False), change_mask(images, predicted, True)
-    assert plain[0, 0, 0, 0, 0] == repair[0, 0, 0, 0, 0] == 1  # step 1: both from the true start
-    assert plain[0, 0].sum() == repair[0, 0].sum() == 1
-    assert plain[0, 1].sum() == 0  # the truth did not change at step 2
-    assert repair[0, 1, 0, 5, 5] == 1 and repair[0, 1].sum() == 1  # but the ghost must go
 
 
 def test_spatial_action_maps_peak_at_the_affordance_pixel():

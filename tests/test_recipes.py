@@ -45,7 +45,6 @@ FITTED = {
     "choice_bias",
     "choice_scales",
     "choice_biases",
-    "variance_scale",
     "vocabulary",
     "outcome_temperature",
 }
@@ -140,6 +139,30 @@ def test_each_recipes_training_command_gives_the_config_stored_in_its_shipped_fi
     for entry in RECIPES.values():
         config = trained_config(BY_NAME[entry.trained])
         assert differences(config, stored_config(entry.file)) == {}, entry.file
+
+
+def test_each_shipped_files_stored_config_is_its_preset_but_for_what_its_recipe_sets():
+    """The preset a recipe names holds every field of the file's stored config that the
+    recipe's command does not set itself (--set, --steps, --threads), so a preset (or the
+    defaults) is the shipped recipe, not a value the commands must remember to override."""
+    from afford.training.fields import paths
+
+    for entry in RECIPES.values():
+        args = parse(BY_NAME[entry.trained])
+        PRESETS = import_module(PRESETS_OF[args.net]).PRESETS
+        preset = PRESETS[args.preset]
+        known = paths(type(preset))
+        named = {known[pair.split("=", 1)[0]] for pair in args.set or ()}
+        named |= {known[k] for k in ("steps", "threads") if getattr(args, k, None) is not None}
+        differ = differences(preset, stored_config(entry.file))
+        assert {tuple(k.split(".")) if "." in k else known[k] for k in differ} <= named, (entry.file, differ)
+
+
+def test_the_prediction_configs_defaults_are_the_shipped_prediction_nets_recipe():
+    from afford.prediction.config import PRESETS, PredictionConfig
+
+    assert PredictionConfig() == PRESETS["cpu-two-outcome"]
+    assert differences(PredictionConfig(), stored_config("prediction.safetensors")) == {}
 
 
 def test_the_cpu_two_outcome_preset_is_the_shipped_prediction_nets_config():

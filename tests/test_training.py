@@ -213,14 +213,14 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     i, t, step = next((i, t, s) for i, t, s in labelled if not s.canonical)
     seq = data.sequence(i)
     expected = step_mask(step, seq.poses[t], seq.poses[t + 1], seq.actions[t])
-    plain = PredictionData(data, "train", random_start=False, effect_masks="effects")
+    plain = PredictionData(data, "train", random_start=False, effect_masks=True)
     plain.indices = [i]
     images, actions, effects = plain[0]
     assert effects.shape == (seq.length, *images.shape[2:]) and effects.dtype == torch.bool
     assert np.array_equal(effects[t].numpy(), expected) and expected.any()
     mirror = AugmentConfig(shift_px=0, mirror=True)
     mirrored = PredictionData(
-        data, "train", augment_config=mirror, random_start=False, effect_masks="effects"
+        data, "train", augment_config=mirror, random_start=False, effect_masks=True
     )
     mirrored.indices = [i]
     while True:  # the mirror is drawn half the time
@@ -230,80 +230,6 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     assert np.array_equal(m_effects[t].numpy(), expected[:, ::-1])
     batch = collate_prediction([plain[0], plain[0]])
     assert len(batch) == 4 and batch[3].shape == (2, seq.length, *images.shape[2:])
-
-
-def test_the_objects_region_covers_every_object_whether_or_not_it_took_an_effect(small_dataset):
-    from afford.data.effects import disks, sequence_effects
-    from afford.data.format import Dataset
-    from afford.data.torch_data import PredictionData
-
-    data = Dataset(small_dataset)
-    i = data.indices("train")[0]
-    seq = data.sequence(i)
-    run = PredictionData(data, "train", random_start=False, effect_masks="objects")
-    run.indices = [i]
-    _, _, regions = run[0]
-    labels = sequence_effects(seq)
-    for t in range(seq.length):
-        on_table = [seq.poses[t][k, :3] for k in range(len(seq.slots)) if not np.isnan(seq.poses[t][k, 0])]
-        assert regions[t].numpy()[disks(on_table)].all()  # canonical steps are weighed too
-        assert regions[t].float().mean() < 0.5
-    assert any(s.canonical for s in labels)
-    with pytest.raises(ValueError, match="unknown effect region"):
-        PredictionData(data, "train", effect_masks="everywhere")
-
-
-def test_the_effect_loss_counts_only_the_effect_pixels():
-    from afford.prediction.config import PRESETS
-    from afford.prediction.model import PredictionNet
-    from afford.prediction.train import sequence_loss
-
-    torch.manual_seed(0)
-    net = PredictionNet(with_fields(PRESETS["tiny"], loss_effect=1.0))
-    images, actions = torch.rand(2, 2, 4, 128, 128), torch.zeros(2, 1, 7)
-    steps = torch.tensor([1, 1])
-    none = torch.zeros(2, 1, 128, 128, dtype=torch.bool)
-    some = none.clone()
-    some[:, :, 40:60, 40:60] = True
-    with torch.no_grad():
-        base = float(sequence_loss(net, images, actions, steps))
-        assert float(sequence_loss(net, images, actions, steps, none)) == pytest.approx(base)
-        predicted = net.rollout(images[:, 0], actions, steps)
-        on_patch = float(((predicted - images[:, 1:]) ** 2).sum(2)[:, :, 40:60, 40:60].mean())
-        with_effects = float(sequence_loss(net, images, actions, steps, some))
-    assert on_patch > 0 and with_effects == pytest.approx(base + on_patch, rel=1e-4)
-
-
-def test_the_coarse_error_forgives_an_object_drawn_a_little_off_but_not_one_missing():
-    from afford.prediction.train import coarse_error
-
-    truth = torch.zeros(1, 4, 32, 32)
-    truth[..., 9:13, 9:13] = 1.0  # an object inside the 8x8 block at (8, 8)
-    nearby = torch.zeros_like(truth)
-    nearby[..., 11:15, 11:15] = 1.0  # drawn two pixels off, inside the same block
-    missing = torch.zeros_like(truth)
-    assert float(coarse_error(nearby - truth, 8)) == pytest.approx(0.0, abs=1e-7)
-    assert float(coarse_error(missing - truth, 8)) == pytest.approx(4 * 16 / 64 / 16)  # 1 block of 16
-    assert (nearby - truth).abs().sum() > (missing - truth).abs().sum()  # pixel-wise, the other way round
-    two = coarse_error(torch.stack([missing - truth, nearby - truth], 1), 8)  # (B, L) of steps
-    assert two.shape == (1, 2) and float(two[0, 0]) > 0 and float(two[0, 1]) == pytest.approx(0.0, abs=1e-7)
-
-
-def test_the_coarse_loss_is_part_of_the_training_loss():
-    from afford.prediction.config import PRESETS
-    from afford.prediction.model import PredictionNet
-    from afford.prediction.train import coarse_error, sequence_loss
-
-    torch.manual_seed(0)
-    net = PredictionNet(PRESETS["tiny"])
-    coarse = PredictionNet(with_fields(PRESETS["tiny"], loss_coarse=2.0))
-    coarse.load_state_dict(net.state_dict())
-    images, actions, steps = torch.rand(2, 2, 4, 128, 128), torch.zeros(2, 1, 7), torch.tensor([1, 1])
-    with torch.no_grad():
-        base = float(sequence_loss(net, images, actions, steps))
-        term = float(coarse_error(net.rollout(images[:, 0], actions, steps) - images[:, 1:], 8).mean())
-        with_coarse = float(sequence_loss(coarse, images, actions, steps))
-    assert term > 0 and with_coarse == pytest.approx(base + 2.0 * term, rel=1e-4)
 
 
 def test_recognition_runs_repeat_with_one_seed_and_differ_with_another(small_dataset, tmp_path):

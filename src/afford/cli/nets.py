@@ -115,13 +115,10 @@ def cmd_eval(args) -> int:
         if not args.no_futures:
             recognizer = load_nets(args.recognition).recognizer
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
-        if "choice_head" in result or "variance" in result:  # calibrations, for `afford export`
+        if "choice_head" in result:  # the head's calibration, for export
             from afford.prediction.calibration import CALIBRATION_FILE, format_calibration
 
-            record = {
-                **result.get("choice_head", {}),
-                **({"variance": result["variance"]} if "variance" in result else {}),
-            }
+            record = result["choice_head"]
             (folder / CALIBRATION_FILE).write_text(json.dumps(record, indent=2) + "\n")
             if not args.json:
                 print(format_calibration(record))
@@ -183,7 +180,7 @@ def cmd_export(args) -> int:
 
     rec_run, pred_run = Path(args.recognition), Path(args.prediction)
     members = [Path(m) for m in args.member or ()]
-    for run in (rec_run, pred_run, *members, *([args.side] if args.side else [])):
+    for run in (rec_run, pred_run, *members):
         _check_run(str(run))
     threshold = read_threshold(rec_run)
     extra = {} if threshold is None else {"threshold": threshold, "tuned_on": "val"}
@@ -210,12 +207,6 @@ def cmd_export(args) -> int:
             config=read_calibration(run),
             config_cls=PredictionConfig,
         )
-    if args.side:  # the side-effect outcome's net beside the prediction net: they load as a pair
-        from afford.prediction.evaluate import load_net
-        from afford.prediction.paired import SIDE_FILE
-
-        sizes[SIDE_FILE] = export_weights(Path(args.side) / args.checkpoint, out / SIDE_FILE, "prediction")
-        load_net(out / PREDICTION_FILE)  # a pair that cannot be made says why now, not when planning
     for name, size in sizes.items():
         print(f"{out / name}: {size / 2**20:.1f} MiB")
     return 0
@@ -381,12 +372,6 @@ def add_parsers(sub) -> None:
         metavar="RUN",
         help="a prediction run to ship as a member of the ensemble planner's ensemble (beside --prediction); "
         "repeat for more",
-    )
-    x.add_argument(
-        "--side",
-        metavar="RUN",
-        help="a prediction run trained with the side-effect term (loss_effect): the planner draws its "
-        "side-effect outcome and --prediction's canonical outcome, with --prediction's head (a pair)",
     )
     x.add_argument("--checkpoint", default=BEST, help=f"file in each RUN (default {BEST})")
     x.add_argument("--out", required=True, metavar="DIR")

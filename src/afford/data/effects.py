@@ -274,11 +274,3 @@ def landing_mask(effects: list[Effect], before: np.ndarray, after: np.ndarray, p
 def step_mask(step: StepEffects, before: np.ndarray, after: np.ndarray, action: np.ndarray) -> np.ndarray:
     """Where one execution's side effects show (all False for a canonical step)."""
     return effect_mask(list(step.effects), before, after, np.asarray(action[Col.POSITION], dtype=float))
-
-
-def objects_mask(before: np.ndarray, after: np.ndarray, action: np.ndarray) -> np.ndarray:
-    """Where any execution's effects could show, whether or not it had one: every object on
-    the table before and after, and the action's point (where a placed object lands or falls
-    from)."""
-    present = [k for k in range(len(before)) if _present(before[k]) or _present(after[k])]
-    return object_mask(before, after, present) | disks([np.asarray(action[Col.POSITION], dtype=float)])

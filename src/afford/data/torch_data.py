@@ -15,7 +15,7 @@ import torch
 from torch.utils.data import Dataset as TorchDataset
 
 from afford.data.augment import NO_AUGMENT, AugmentConfig, augment
-from afford.data.effects import objects_mask, sequence_effects, step_mask
+from afford.data.effects import sequence_effects, step_mask
 from afford.data.format import Dataset
 from afford.images import to_chw
 
@@ -47,10 +47,10 @@ def collate_recognition(batch) -> tuple[torch.Tensor, list[torch.Tensor]]:
 class PredictionData(TorchDataset):
     """A run of L = 1..max_steps executions from a random start state of a sequence.
 
-    Returns images (L+1, 4, H, W) and actions (L, 7); with `effect_masks` (a name in REGIONS),
-    also (L, H, W) masks of that region of each step (data/effects.py), moved with the images
-    by the augmentation. With `random_start` off, every run starts at state 0 and takes as many steps
-    as the sequence has (for evaluation per step).
+    Returns images (L+1, 4, H, W) and actions (L, 7); with `effect_masks`, also (L, H, W) masks
+    of where each step had a side effect (data/effects.py), moved with the images by the
+    augmentation: the labels of a two-outcome net's training. With `random_start` off, every
+    run starts at state 0 and takes as many steps as the sequence has (for evaluation per step).
     """
 
     def __init__(
@@ -61,7 +61,7 @@ class PredictionData(TorchDataset):
         augment_config: AugmentConfig = NO_AUGMENT,
         random_start: bool = True,
         seed: int = 0,
-        effect_masks: str | None = None,
+        effect_masks: bool = False,
     ):
         self.data = data
         self.indices = [i for i in data.indices(split) if data.sequence(i).length > 0]
@@ -69,8 +69,6 @@ class PredictionData(TorchDataset):
         self.config = augment_config
         self.random_start = random_start
         self.rng = np.random.default_rng(seed)
-        if effect_masks is not None and effect_masks not in REGIONS:
-            raise ValueError(f"unknown effect region {effect_masks!r}: one of {', '.join(REGIONS)}")
         self.effect_masks = effect_masks
         self._labels: dict[int, list] = {}  # a sequence's effect labels, made once per process
 
@@ -83,7 +81,7 @@ class PredictionData(TorchDataset):
         stop = min(seq.length, start + self.max_steps)
         images = np.stack([seq.image(t) for t in range(start, stop + 1)])
         if self.effect_masks:  # a fifth channel, so that shifts and mirrors move it with the image
-            masks = REGIONS[self.effect_masks](self, seq, start, stop)
+            masks = _effect_masks(self, seq, start, stop)
             images = np.concatenate([images, masks[..., None]], -1)
         images, (actions,) = augment(images, [seq.actions[start:stop]], self.config, self.rng, noisy=[True])
         if self.effect_masks:
@@ -131,21 +129,6 @@ def _effect_masks(data: PredictionData, seq, start: int, stop: int) -> np.ndarra
         if not labels[t].canonical:
             masks[t - start + 1] = step_mask(labels[t], seq.poses[t], seq.poses[t + 1], seq.actions[t])
     return masks
-
-
-def _object_masks(data: PredictionData, seq, start: int, stop: int) -> np.ndarray:
-    """(stop - start + 1, H, W) float32: state t's mask covers every object of step t - 1,
-    effect or not (the start state's is empty)."""
-    masks = np.zeros((stop - start + 1, *seq.rgb.shape[1:3]), np.float32)
-    for t in range(start, stop):
-        masks[t - start + 1] = objects_mask(seq.poses[t], seq.poses[t + 1], seq.actions[t])
-    return masks
-
-
-# Where `PredictionConfig.loss.effect` weighs the squared error again: the pixels of the side
-# effects that happened, or every object's pixels, so that drawing an effect that did not
-# happen costs as much as missing one that did.
-REGIONS = {"effects": _effect_masks, "objects": _object_masks}
 
 
 def collate_prediction(batch) -> tuple[torch.Tensor, ...]:

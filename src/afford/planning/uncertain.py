@@ -9,15 +9,6 @@ the one the members agree on wins. For a negative goal (eq. (4) takes the greate
 spread counts the other way: a state sure to be far from the goal beats one that may not be.
 With risk 0 the score is the members' mean loss, the ensemble without caution.
 
-Members with a variance head (prediction/variance.py) also say how sure each pixel is: each
-member's image is then a Gaussian, mean its image, standard deviation sigma per pixel, the
-error shared by the pixels of a state (one standard normal z scales every sigma: an object
-that may have moved moves as a whole). Eq. (5) of that state is taken at the three points of
-Gauss-Hermite quadrature, z = -sqrt(3), 0, sqrt(3) with weights 1/6, 2/3, 1/6 (exact for the
-mean and variance of a polynomial in z of degree up to 2, which a window's squared error is),
-so each member gives a mean and a variance of its loss; the plan's are their mean and the mean
-of the variances plus the variance of the means (the law of total variance).
-
 Members that foresee two outcomes per step (a canonical one and a side effect, with a head
 that says how likely each is) may also keep both (`EnsembleBranchingModel`, `--outcomes
 expected`): each member then holds its own branches (planning/branches.py), its loss is their
@@ -44,8 +35,6 @@ from afford.sim.affordance import encode_affordance
 from afford.sim.affordances import Affordance
 
 RISK = 1.0  # the ensemble planner's default weight on the spread of a plan's outcome
-# Gauss-Hermite points and weights for a standard normal: the samples of a member's image.
-QUADRATURE = (np.array([-np.sqrt(3.0), 0.0, np.sqrt(3.0)]), np.array([1 / 6, 2 / 3, 1 / 6]))
 
 
 class EnsembleError(UserError):
@@ -55,44 +44,30 @@ class EnsembleError(UserError):
 @dataclass
 class EnsembleState:
     """Each member's own state: its latent and memory trace (a tuple of K: members' latents may
-    differ in width, a pair's being two nets'), and the images stacked on a first axis of K."""
+    differ in width), and the images stacked on a first axis of K."""
 
     latent: tuple[torch.Tensor, ...]
     memory: tuple[torch.Tensor, ...]
     images: np.ndarray  # (K, H, W, C): each member's predicted image
-    variances: np.ndarray | None = None  # (K, H, W): each member's variance head (None: none has)
 
     @property
     def pixel_spread(self) -> np.ndarray:
         """(H, W): the per-pixel standard deviation of the state: the members' spread
-        (`prediction.ensemble.spread`), with their variance heads' variance added to it."""
-        if self.variances is None:
-            return spread(self.images)
-        return np.sqrt(spread(self.images) ** 2 + self.variances.mean(axis=0))
+        (`prediction.ensemble.spread`)."""
+        return spread(self.images)
 
 
 def risk_score(
     losses: np.ndarray, risk: float, negative: bool, within: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(score, spread) per state from the members' eq. (5) losses (K, B), and `within` (K, B)
-    each member's own variance of its loss (its variance head's): the mean plus (a positive
-    goal) or minus (a negative one) `risk` standard deviations, the variance being the members'
-    mean variance plus the variance of their means."""
+    each member's own variance of its loss (over its branches): the mean plus (a positive goal)
+    or minus (a negative one) `risk` standard deviations, the variance being the members' mean
+    variance plus the variance of their means."""
     mean = losses.mean(axis=0)
     variance = losses.var(axis=0) + (0.0 if within is None else within.mean(axis=0))
     std = np.sqrt(variance)
     return mean + (-risk if negative else risk) * std, std
-
-
-def quadrature_losses(goal: Goal, images: np.ndarray, variances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. (5)'s mean and variance (N,) for N Gaussian images: means (N, H, W, C), variances
-    per pixel (N, H, W), their error shared by every pixel (the module's doc)."""
-    points, weights = QUADRATURE
-    sigma = np.sqrt(np.maximum(variances, 0.0))[None, ..., None]
-    samples = np.clip(images[None] + points[:, None, None, None, None] * sigma, 0.0, 1.0)
-    losses = goal.loss(samples.reshape(-1, *images.shape[1:])).reshape(len(points), len(images))
-    mean = weights @ losses
-    return mean, weights @ (losses - mean) ** 2
 
 
 class EnsembleModel(WorldModel):
@@ -101,9 +76,9 @@ class EnsembleModel(WorldModel):
     def __init__(
         self, image: np.ndarray, recognizer: Recognizer, members: tuple[PredictionNet, ...], risk: float
     ):
-        if not members or (len(members) < 2 and not members[0].config.model.variance):
+        if len(members) < 2:
             raise EnsembleError(
-                f"an ensemble needs at least 2 prediction nets, or one with a variance head, not "
+                f"an ensemble needs at least 2 prediction nets, not "
                 f"{len(members)}: put the members in the weights folder's ensemble/ (`afford export "
                 "--member`), beside its prediction net"
             )
@@ -128,23 +103,17 @@ class EnsembleModel(WorldModel):
     @torch.no_grad()
     def predict(self, parents: list[Node], actions: list[Affordance]):
         rows = torch.from_numpy(np.stack([encode_affordance(a) for a in actions]))
-        heads = any(m.config.model.variance for m in self.members)
-        out_latent, out_memory, out_images, out_variances = [], [], [], []
+        out_latent, out_memory, out_images = [], [], []
         for k, member in enumerate(self.members):
             latent = torch.stack([p.state.latent[k] for p in parents])
             memory = torch.stack([p.state.memory[k] for p in parents])
             image = to_chw(np.stack([p.state.images[k] for p in parents]))
             step = member.step_hypotheses(latent, memory, image, rows)
-            latent, memory, image, log_var = step.latent, step.memory, step.image, step.log_variance
-            out_latent.append(latent)
-            out_memory.append(memory)
-            out_images.append(to_hwc(image))
-            if heads:  # a member without a head: zero variance of its own
-                var = torch.zeros_like(image[:, 0]) if log_var is None else member.variance(log_var)[:, 0]
-                out_variances.append(var.numpy())
+            out_latent.append(step.latent)
+            out_memory.append(step.memory)
+            out_images.append(to_hwc(step.image))
         self.p_steps += len(parents) * len(self.members)
         images = np.stack(out_images)  # (K, B, H, W, C)
-        variances = np.stack(out_variances) if heads else None
         return [
             (
                 images[:, j].mean(axis=0),
@@ -152,29 +121,16 @@ class EnsembleModel(WorldModel):
                     tuple(t[j] for t in out_latent),
                     tuple(t[j] for t in out_memory),
                     images[:, j],
-                    None if variances is None else variances[:, j],
                 ),
             )
             for j in range(len(parents))
         ]
 
     def score(self, goal: Goal, nodes: list[Node]) -> Scores:
-        """Eq. (5) per member (its expectation by `quadrature_losses` where members have a
-        variance head), then `risk_score`: the score and the standard deviation of the loss."""
-        k = len(self.members)
+        """Eq. (5) per member, then `risk_score`: the score and the standard deviation of the loss."""
         stacked = np.concatenate([n.state.images for n in nodes])  # (B*K, H, W, C), node-major
-        if all(n.state.variances is None for n in nodes):
-            losses = goal.loss(stacked).reshape(len(nodes), k).T
-            return Scores(*risk_score(losses, self.risk, goal.negative))
-        variances = np.concatenate(
-            [
-                n.state.variances if n.state.variances is not None else np.zeros(n.state.images.shape[:3])
-                for n in nodes
-            ]
-        )
-        mean, within = quadrature_losses(goal, stacked, variances)
-        shape = (len(nodes), k)
-        return Scores(*risk_score(mean.reshape(shape).T, self.risk, goal.negative, within.reshape(shape).T))
+        losses = goal.loss(stacked).reshape(len(nodes), len(self.members)).T
+        return Scores(*risk_score(losses, self.risk, goal.negative))
 
 
 @dataclass

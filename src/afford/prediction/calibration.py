@@ -143,23 +143,12 @@ def read_calibration(run: str | Path) -> dict | None:
     config = {k: record[k] for k in ("choice_scale", "choice_bias") if k in record}
     if "choice_scales" in record:  # fitted per action type (absent in runs calibrated before)
         config |= {k: tuple(record[k]) for k in ("choice_scales", "choice_biases")}
-    if "variance" in record:  # the variance head's scale (prediction/ensemble.calibrate_variance)
-        config["variance_scale"] = record["variance"]["variance_scale"]
     return config or None
 
 
 def format_calibration(record: dict) -> str:
-    """The calibrations a run's calibration.json holds, a line or three each."""
-    lines = _head_lines(record) if "choice_scale" in record else []
-    if "variance" in record:
-        v, test = record["variance"], record["variance"]["test"]
-        lines.append(
-            f"variance head: spread-to-error ratio {v['val']['ratio']:.3f} on val -> variance_scale "
-            f"{v['variance_scale']:.4g}; test {test['ratio']:.3f} raw, {test['ratio_calibrated']:.3f} "
-            f"calibrated, Spearman(variance, squared error) {test['rank_correlation']:.3f} over "
-            f"{test['states']} states"
-        )
-    return "\n".join(lines)
+    """The choice head's calibration a run's calibration.json holds, a line or three."""
+    return "\n".join(_head_lines(record) if "choice_scale" in record else [])
 
 
 def _head_lines(record: dict) -> list[str]:

@@ -16,9 +16,9 @@ CHANGED = 0.02  # ours: a ground-truth pixel changed when a channel moved by mor
 class ModelConfig:
     """The net's shape: E, P^a per affordance type, D (paper II.C)."""
 
-    # "dense": the paper's vector latent (dense.py); "spatial": a latent grid (spatial.py).
-    # The default is the paper's, so checkpoints written before the spatial net still load.
-    architecture: str = "dense"
+    # "dense": the paper's vector latent (dense.py, the `paper` preset); "spatial": a latent
+    # grid (spatial.py), the shipped nets'.
+    architecture: str = "spatial"
     channels: int = 4  # RGBD
     # --- dense: E and D (D mirrors E).
     conv_channels: int = 8  # 2 convolutions, 3x3, stride 2: 128x128 -> 32x32x8 = 8192
@@ -44,13 +44,6 @@ class ModelConfig:
     # Action vector normalisation: (position - centre) / scale, so its values are order 1.
     position_centre: tuple[float, float, float] = (0.0, 0.27, 0.05)
     position_scale: tuple[float, float, float] = (0.2, 0.2, 0.1)
-    # A per-pixel variance beside D's image (spatial only; prediction/variance.py, paper V):
-    # D's last features also give log sigma^2 of each pixel of the state it predicts, trained by
-    # beta-NLL against the truth (`loss.nll`, `loss.nll_beta`) with the image itself held fixed
-    # in that term, so the mean image learns exactly as without it. `variance_scale`: the factor
-    # fitted on val that makes the variance match the squared error (1: as trained).
-    variance: bool = False
-    variance_scale: float = 1.0
 
     @property
     def latent_size(self) -> int:
@@ -79,29 +72,20 @@ class OutcomesConfig:
     # is carried to the next step, the head learns which one won. One image can only hedge
     # between "the ball stays" and "the ball falls" (a blur that matches neither); K can draw
     # both, sharp, and say which is likely.
-    hypotheses: int = 1
+    hypotheses: int = 2
     # Which candidate takes each step's loss: "winner", the one nearest the truth; "effect"
     # (K = 2), chosen by the step's label (data/effects.py): the first draws canonical steps,
     # the second steps with a side effect, and the head learns how likely a side effect is.
-    hypotheses_by: str = "winner"
+    hypotheses_by: str = "effect"
     # Where the candidates part (model.FORKS): "decoder", they share E, P^a and D but D's last
     # layer (one latent, K images drawn from it); "latent", each P^a's last block and output
     # layer are repeated per candidate, so each outcome has its own dc and D decodes each: the
     # latent itself forks, and the candidate carried on gives eq. (2) its dc.
-    fork: str = "decoder"
-    # With fork="latent", how many of P^a's last blocks each other outcome has of its own (1:
-    # the last block only). More gives the side-effect outcome room to draw where objects land
-    # without moving the canonical outcome's layers (trained="side" keeps those fixed).
-    fork_blocks: int = 1
+    fork: str = "latent"
     # With hypotheses_by=effect, in use: the side-effect outcome is carried on where the head
     # gives it more than this probability (0.5: the likelier). A cut-off tuned on val, as the
     # recognition net's is: a second outcome drawn where none follows costs canonical plans.
     effect_threshold: float = 0.5
-    # The choice head (spatial.CHOICE_HEADS): "pooled", a linear map of each candidate's dc
-    # pooled over the grid; "grid", two convolutions over the scene's latent beside each dc
-    # (choice_channels wide) before pooling, so it can see where the action meets the scene.
-    choice_head: str = "pooled"
-    choice_channels: int = 32
     # The head's side-effect logit (the second outcome's minus the first's) is read as
     # sigmoid(choice_scale * logit + choice_bias): Platt scaling fitted on val
     # (prediction/calibration.py). Training draws side-effect runs more often than they come
@@ -122,39 +106,18 @@ class LossConfig:
 
     # The weights' flat names (`--set loss_l1=1`): "l1" alone does not say it is a loss's.
     flat_names: ClassVar[dict[str, str]] = {
-        k: f"loss_{k}" for k in ("mse", "l1", "mask", "values", "effect", "coarse", "choice", "others", "nll")
+        k: f"loss_{k}" for k in ("mse", "l1", "mask", "values", "choice", "others")
     }
 
     # mse * squared error + l1 * absolute error (both summed over channels, mean over pixels)
     # + mask * squared error of eq. (3)'s mask against where the truth changed + values * D's
     # new values' absolute error there.
     mse: float = 1.0
-    l1: float = 0.0
-    mask: float = 0.0
-    values: float = 0.0
-    # The mask and values terms' "changed": from the true previous state (False), or from the
-    # step's own input, the previous prediction, so D learns to repair earlier errors (True).
-    repair: bool = False
-    # The squared error on the pixels where a step had a side effect, as a mean over those
-    # pixels; 0: off, and the batches carry no effect masks.
-    effect: float = 0.0
-    # Where that squared error is taken (data/torch_data.REGIONS): "effects", the pixels of
-    # the side effects that happened (weighs only one way: the net learns to draw effects where
-    # none follow); "objects", every object's pixels in every step, effect or not.
-    effect_region: str = "effects"
-    # The absolute error between prediction and truth each averaged over blocks of
-    # coarse_px x coarse_px pixels (train.coarse_error). Pixel losses charge an object
-    # drawn a few pixels from where it lands twice (drawn where it is not, missing where it is)
-    # and one not drawn at all once, so a net unsure of a landing to within the object's size
-    # draws none (foresight of the landing disks: 0.01 on the shipped net, `afford eval
-    # prediction`'s parts). Over blocks, an object drawn within its block costs nothing and one
-    # missing costs as before.
-    coarse: float = 0.0
-    coarse_px: int = 8  # the latent grid's cell at 128 px
+    l1: float = 1.0
+    mask: float = 0.1
+    values: float = 0.1
     choice: float = 0.1  # K > 1: the choice head's cross-entropy against the winner
     others: float = 0.05  # K > 1: every candidate's absolute error, so that none stops learning
-    nll: float = 0.0  # model.variance: the beta-NLL of the per-pixel variance
-    nll_beta: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -178,7 +141,7 @@ class SamplingConfig:
     # The share of training runs drawn from sequences with a side effect (data/effects.py; 0: as
     # the data comes, about 4 in 10 sequences hold one somewhere). With turn_fraction too, each
     # share is a floor (a sequence may hold both) and the rest holds neither.
-    effect_fraction: float = 0.0
+    effect_fraction: float = 0.5
     # The share drawn from sequences where a place had a side effect (the block tips, the object
     # placed falls or slides): a floor beside the two above. Places are the side effects the net
     # foresees worst, and its head is underconfident where a place at a block's end tips it
@@ -193,28 +156,18 @@ class TrainingConfig:
     optimizer: str = "adam"  # "signsgd" as the paper, or "adam"
     lr: float = 1e-3
     batch_size: int = 32
-    steps: int = 3000
+    steps: int = 4200
     eval_every: int = 250
     log_every: int = 25
-    schedule: str = "plateau"  # "plateau": the paper's halving; "cosine": warm-up, cosine decay
+    schedule: str = "cosine"  # "plateau": the paper's halving; "cosine": warm-up, cosine decay
     patience: int = 5  # plateau: halve the lr after this many evaluations without improvement (paper)
     warmup: int = 200  # cosine: batches of linear warm-up
-    # Gradients rescaled to at most this norm before each step (0: off; the shipped prediction net
-    # was trained with 1.0). A from-scratch two-outcome
-    # run (fork=latent) met one batch of loss 1.3e6 at step 300 (the choice head's cross-entropy
-    # on an unbounded dc): the gradient filled Adam's second moments, and the net learned at a
-    # fraction of its rate for the rest of the run (val error 3x the one-outcome run's).
-    grad_clip: float = 0.0
-    # What training changes (train.TRAINED): "all"; "outcomes", only the other outcomes' own
-    # parts (fork=latent's P^a ends, the choice head), so that fine-tuning a one-outcome net into
-    # two keeps its first outcome exactly: what it foresaw, and the plans it found, stay;
-    # "head", only the choice head (a new head on a net whose outcomes are kept); "side", only
-    # the other outcomes' P^a ends (the first outcome and the head's weights kept: the
-    # side-effect outcome redrawn); "variance", only the variance head (a net that learns where
-    # it is unsure, its images unchanged).
-    trained: str = "all"
+    # Gradients rescaled to at most this norm before each step (0: off). A from-scratch
+    # two-outcome run (fork=latent) met one batch of loss 1.3e6 at step 300 (the choice head's
+    # cross-entropy on an unbounded dc): the gradient filled Adam's second moments, and the net
+    # learned at a fraction of its rate for the rest of the run (val error 3x the one-outcome run's).
+    grad_clip: float = 1.0
     threads: int = 2
-    bf16: bool = False  # bfloat16 autocast in training (AVX-512 BF16 CPUs); measured in benchmarks/
     loader_workers: int = 1  # background processes building batches (0: in the training thread)
 
 
@@ -222,7 +175,27 @@ class TrainingConfig:
 class PredictionConfig:
     """The EM*D net's config: its shape, outcomes, loss, training runs and schedule, each a
     record. `training.fields` gives each field a flat name too (`lr`, `hypotheses`, `loss_l1`), as
-    `--set` and configs stored as one flat dict (the shipped files) write them."""
+    `--set` and configs stored as one flat dict (the shipped files) write them. The defaults are
+    the shipped prediction net's recipe (`cpu-two-outcome`)."""
+
+    # Fields that shipped files store but this code does not vary: each with the one value it
+    # runs (training/fields.from_dict refuses a stored config that asks for another).
+    removed: ClassVar[dict[str, object]] = {
+        "variance": False,
+        "variance_scale": 1.0,
+        "fork_blocks": 1,
+        "choice_head": "pooled",
+        "choice_channels": 32,
+        "repair": False,
+        "loss_effect": 0.0,
+        "effect_region": "effects",
+        "loss_coarse": 0.0,
+        "coarse_px": 8,
+        "loss_nll": 0.0,
+        "nll_beta": 0.5,
+        "bf16": False,
+        "trained": "all",
+    }
 
     model: ModelConfig = ModelConfig()
     outcomes: OutcomesConfig = OutcomesConfig()
@@ -234,31 +207,38 @@ class PredictionConfig:
 # Tests' nets: a few batches of 4, built in the training thread.
 _TINY_SCHEDULE = {"batch_size": 4, "loader_workers": 0, "steps": 20, "eval_every": 10, "log_every": 5}
 
-# The spatial latent: it learns in thousands of batches, not a million. Adam, because SignSGD at
-# the paper's rate needs the paper's million batches.
+# One outcome per step, as the paper: the net the recognition and agreement models' predicted
+# training states come from (afford/recipes/).
 _CPU = with_fields(
     PredictionConfig(),
-    architecture="spatial",
-    loss_l1=1.0,
-    loss_mask=0.1,
-    loss_values=0.1,
-    schedule="cosine",
-    steps=4200,
+    hypotheses=1,
+    hypotheses_by="winner",
+    fork="decoder",
+    effect_fraction=0.0,
+    grad_clip=0.0,
+)
+
+# The paper's dense latent at CPU size: the paper's schedule and losses.
+_DENSE = with_fields(
+    _CPU,
+    architecture="dense",
+    loss_l1=0.0,
+    loss_mask=0.0,
+    loss_values=0.0,
+    schedule="plateau",
+    steps=3000,
 )
 
 PRESETS = {
     "cpu": _CPU,
-    # The shipped prediction net's recipe (afford/recipes/; with --more-data data/effects): two
-    # outcomes forked in the latent, the second drawing side effects, half the runs holding one,
-    # and the gradient clipped, which a two-outcome run from scratch needs.
-    "cpu-two-outcome": with_fields(
-        _CPU, hypotheses=2, hypotheses_by="effect", fork="latent", effect_fraction=0.5, grad_clip=1.0
-    ),
-    # The dense net at CPU size (the shipped net before the spatial one), for comparison.
-    "dense-cpu": PredictionConfig(),
+    # The shipped prediction nets' recipe (afford/recipes/; with --more-data data/effects), the
+    # defaults: two outcomes forked in the latent, the second drawing side effects, half the
+    # runs holding one, and the gradient clipped, which a two-outcome run from scratch needs.
+    "cpu-two-outcome": PredictionConfig(),
+    "dense-cpu": _DENSE,
     # The paper's sizes (II.C; the authors' public configuration for the P modules) and schedule.
     "paper": with_fields(
-        PredictionConfig(),
+        _DENSE,
         dense=(4096,),
         latent=128,
         optimizer="signsgd",
@@ -268,11 +248,8 @@ PRESETS = {
         log_every=500,
     ),
     "tiny": with_fields(
-        PredictionConfig(),
-        architecture="spatial",
-        loss_l1=1.0,
-        loss_mask=0.1,
-        loss_values=0.1,
+        _CPU,
+        schedule="plateau",
         encoder_channels=(4, 8, 8),
         latent_channels=4,
         memory_channels=2,
@@ -283,7 +260,7 @@ PRESETS = {
         **_TINY_SCHEDULE,
     ),
     "tiny-dense": with_fields(
-        PredictionConfig(),
+        _DENSE,
         conv_channels=2,
         dense=(16,),
         latent=8,

@@ -73,10 +73,6 @@ class DenseDecoder(nn.Module):
         x = self.dense(dc).view(-1, *self.shape).contiguous(memory_format=torch.channels_last)
         return clamped_tanh(self.up(x))
 
-    def decode(self, dc: torch.Tensor, image: torch.Tensor) -> tuple[torch.Tensor, None]:
-        """`forward`'s difference image, and no variance (the spatial decoder's may have one)."""
-        return self(dc, image), None
-
 
 class DenseP(nn.Module):
     """One affordance type's prediction module (Fig. 4, the authors' configuration).

@@ -19,7 +19,6 @@ import torch
 
 from afford.prediction.model import PredictionNet
 from afford.prediction.rollout import Rollout
-from afford.prediction.variance import outcome_variance, total_variance
 
 MEMBERS_DIR = "ensemble"  # in a weights folder: the members beside its prediction net
 
@@ -29,6 +28,25 @@ def spread(images: np.ndarray | torch.Tensor) -> np.ndarray:
     deviation over the members, mean over the channels -> (..., H, W). Zero where they agree."""
     x = np.asarray(images, dtype=np.float64)
     return x.std(axis=0).mean(axis=-1)
+
+
+def total_variance(means: torch.Tensor, variances: torch.Tensor) -> torch.Tensor:
+    """The variance of a state per pixel from K members' means (K, ..., C, H, W) and variances
+    (K, ..., H, W): the mean of the variances plus the variance of the means (averaged over the
+    channels), the law of total variance (as PETS, Chua et al. 2018). Zero where the members
+    agree and are sure."""
+    return variances.mean(0) + means.var(0, unbiased=False).mean(-3)
+
+
+def outcome_variance(
+    candidates: torch.Tensor, probability: torch.Tensor, drawn: torch.Tensor
+) -> torch.Tensor:
+    """Per pixel (..., H, W), the expected squared distance (averaged over the channels) of a
+    net's K outcomes (..., K, C, H, W), weighed by their probabilities (..., K), from the image
+    it drew (..., C, H, W): a two-outcome net's own variance, as the truth is each outcome with
+    the head's probability. Zero when it is sure or its outcomes agree."""
+    squared = ((candidates - drawn.unsqueeze(-4)) ** 2).mean(-3)
+    return (probability[..., None, None] * squared).sum(-3)
 
 
 def member_paths(folder: str | Path) -> list[Path]:
@@ -55,7 +73,7 @@ def check_members(nets: list[PredictionNet]) -> None:
 @dataclass
 class Calibration:
     """Per predicted state (a run's step): the members' spread and the ensemble mean's error,
-    and the state's predicted variance (`variance.total_variance`: the members' variance heads
+    and the state's predicted variance (`total_variance`: the members' own outcome variances
     and their spread) against the mean's squared error."""
 
     spread: np.ndarray  # mean per-pixel spread (`spread`) over the image
@@ -162,35 +180,11 @@ def calibrate(members, data, split: str = "test", limit: int | None = None, batc
 
 def member_variance(net: PredictionNet, rolled: Rollout, actions: torch.Tensor) -> torch.Tensor:
     """A member's own variance per pixel of each state it rolled out (B, L, H, W), from its
-    `rollout_hypotheses` of `actions` (B, L, 7): its variance head's, plus, for a net with a
-    side-effect outcome, the spread of its outcomes about the one it drew
-    (`variance.outcome_variance`)."""
-    states, candidates, logits, log_var = rolled.states, rolled.candidates, rolled.logits, rolled.log_variance
-    variance = torch.zeros_like(states[:, :, 0]) if log_var is None else net.variance(log_var)[:, :, 0]
-    if candidates is not None and net.config.outcomes.hypotheses_by == "effect":
-        b, length = logits.shape[:2]
-        probability = net.probabilities(logits.flatten(0, 1), actions.flatten(0, 1)).view(b, length, -1)
-        variance = variance + outcome_variance(candidates.float(), probability, states.float())
-    return variance
-
-
-VARIANCE_RUNS = 300  # runs of each split the variance's calibration rolls out
-
-
-def calibrate_variance(members, data, limit: int | None = VARIANCE_RUNS) -> dict:
-    """The predicted variance against the squared error: the scale fitted on val that makes
-    the spread-to-error ratio 1 there, and the ratio and Spearman on val and test, a JSON-ready
-    record whose `variance_scale` (the members' own times the fitted one) goes in the config."""
-    val, test = (calibrate(members, data, split, limit) for split in ("val", "test"))
-    fitted = val.fitted_scale()
-    return {
-        "variance_scale": round(members[0].config.model.variance_scale * fitted, 6),
-        "fitted_on": "val",
-        "val": {"states": len(val.variance), "ratio": round(val.ratio(), 4)},
-        "test": {
-            "states": len(test.variance),
-            "ratio": round(test.ratio(), 4),
-            "ratio_calibrated": round(test.ratio(fitted), 4),
-            "rank_correlation": round(test.variance_rank_correlation(), 4),
-        },
-    }
+    `rollout_hypotheses` of `actions` (B, L, 7): for a net with a side-effect outcome, the
+    spread of its outcomes about the one it drew (`outcome_variance`); zero for one outcome."""
+    states, candidates, logits = rolled.states, rolled.candidates, rolled.logits
+    if candidates is None or net.config.outcomes.hypotheses_by != "effect":
+        return torch.zeros_like(states[:, :, 0])
+    b, length = logits.shape[:2]
+    probability = net.probabilities(logits.flatten(0, 1), actions.flatten(0, 1)).view(b, length, -1)
+    return outcome_variance(candidates, probability, states)

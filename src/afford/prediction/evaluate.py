@@ -23,9 +23,8 @@ from afford.images import to_chw, to_hwc
 from afford.prediction import foresight
 from afford.prediction.config import CHANGED, PredictionConfig
 from afford.prediction.model import PredictionNet
-from afford.prediction.paired import PairedNet, side_file
 from afford.sim.affordances import TYPES
-from afford.training.checkpoint import CheckpointError, load_net_from_checkpoint
+from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "prediction"
 TRAIN_SEQUENCES = 500
@@ -37,16 +36,9 @@ METRICS = {"all_area": None, "changed_area": CHANGED, "changed_area_any": 0.0}
 SPLIT_METRICS = ("changed_area_canonical", "changed_area_side")
 
 
-def load_net(path: str | Path) -> tuple[PredictionNet | PairedNet, PredictionConfig]:
-    """The prediction net in a checkpoint, and its config; a pair (paired.py) where a
-    side-effect net lies beside it (the pair's config: the main net's)."""
+def load_net(path: str | Path) -> tuple[PredictionNet, PredictionConfig]:
+    """The prediction net in a checkpoint, and its config."""
     net, config, _ = load_net_from_checkpoint(path, KIND, PredictionConfig, PredictionNet)
-    if side_file(path).is_file():
-        side, _, _ = load_net_from_checkpoint(side_file(path), KIND, PredictionConfig, PredictionNet)
-        try:
-            net = PairedNet(net, side).eval()
-        except ValueError as e:
-            raise CheckpointError(f"{side_file(path)}: {e}") from None
     return net, config
 
 
@@ -152,10 +144,6 @@ def evaluate(
         from afford.prediction.calibration import calibrate
 
         result["choice_head"] = calibrate(net, data)
-    if config.model.variance:
-        from afford.prediction.ensemble import calibrate_variance
-
-        result["variance"] = calibrate_variance([net], data)
     if recognizer is not None:
         from afford.prediction.futures import future_recall, net_predictor
 

@@ -60,30 +60,26 @@ class Hypotheses:
 class Step:
     """One step carried on (`PredictionNet.step_hypotheses`): the next latent and memory trace
     (eq. 2), the image drawn and D's difference image (B, C+1, H, W: eq. (3)'s new values and,
-    last, its mask), the K candidates (None with one hypothesis) and the log sigma^2 of the
-    state drawn (B, 1, H, W; None without a variance head)."""
+    last, its mask), and the K candidates (None with one hypothesis)."""
 
     latent: torch.Tensor
     memory: torch.Tensor
     image: torch.Tensor
     difference: torch.Tensor
     hypotheses: Hypotheses | None = None
-    log_variance: torch.Tensor | None = None
 
 
 @dataclass
 class Candidates:
     """A step's K candidates before one is carried on (`PredictionNet.candidates`): dc and the
     memory trace ((B, K, ...) when forked in the latent, else (B, ...)), the images
-    (B, K, C, H, W), D's differences (B, K, C+1, H, W), the choice head's logits (B, K) and the
-    log variances (B, K, 1, H, W) or None."""
+    (B, K, C, H, W), D's differences (B, K, C+1, H, W) and the choice head's logits (B, K)."""
 
     dc: torch.Tensor
     memory: torch.Tensor
     images: torch.Tensor
     differences: torch.Tensor
     logits: torch.Tensor
-    log_variance: torch.Tensor | None
 
 
 @dataclass
@@ -95,7 +91,6 @@ class Outcomes:
     memory: torch.Tensor
     images: torch.Tensor
     probability: torch.Tensor
-    log_variance: torch.Tensor | None = None  # (B, K, 1, H, W) with a variance head
 
 
 # Weight of what a candidate would draw (its new values, before eq. (3)'s mask) in choosing the
@@ -136,8 +131,6 @@ class PredictionNet(Rollouts, nn.Module):
             raise ValueError(f"hypotheses_by: 'winner' or 'effect', not {o.hypotheses_by!r}")
         if o.fork not in FORKS:
             raise ValueError(f"fork: one of {', '.join(FORKS)}, not {o.fork!r}")
-        if m.variance and m.architecture != "spatial":
-            raise ValueError("variance: a variance head needs the spatial architecture")
         if o.hypotheses_by == "effect" and o.hypotheses != 2:
             raise ValueError("hypotheses_by=effect needs hypotheses=2: a canonical and a side-effect outcome")
         encoder, p_module, decoder = ARCHITECTURES[m.architecture]
@@ -200,9 +193,7 @@ class PredictionNet(Rollouts, nn.Module):
         b, k = len(image), self.outcomes.hypotheses
         repeated = image.repeat_interleave(k, 0)
         forked = self.outcomes.fork == "latent"  # dc (B, K, C, h, w): each candidate its own dc
-        difference, log_var = (
-            self.decoder.decode(dc.flatten(0, 1), repeated) if forked else self.decoder.decode(dc, image)
-        )
+        difference = self.decoder(dc.flatten(0, 1), repeated) if forked else self.decoder(dc, image)
         differences = difference.view(b, k, -1, *difference.shape[-2:])
         candidates = apply_difference(repeated, differences.flatten(0, 1))  # eq. (3)
         return Candidates(
@@ -210,13 +201,8 @@ class PredictionNet(Rollouts, nn.Module):
             memory_out,
             candidates.view(b, k, *image.shape[1:]),
             differences,
-            self.decoder.choice_logits(dc, latent),
-            None if log_var is None else log_var.reshape(b, k, 1, *log_var.shape[-2:]),
+            self.decoder.choice_logits(dc),
         )
-
-    def variance(self, log_variance: torch.Tensor) -> torch.Tensor:
-        """The variance per pixel from the head's log sigma^2, scaled by the calibration on val."""
-        return self.config.model.variance_scale * torch.exp(log_variance.float())
 
     def step_outcomes(self, latent, memory, image, rows) -> Outcomes:
         """Every outcome of one step, each carried on as its own state, with the choice head's
@@ -229,11 +215,10 @@ class PredictionNet(Rollouts, nn.Module):
                 step.memory[:, None],
                 step.image[:, None],
                 image.new_ones(len(image), 1),
-                None if step.log_variance is None else step.log_variance[:, None],
             )
         c = self.candidates(latent, memory, image, rows)
         next_latent, memory_out = self.outcome_states(latent, c.dc, c.memory)
-        return Outcomes(next_latent, memory_out, c.images, self.probabilities(c.logits, rows), c.log_variance)
+        return Outcomes(next_latent, memory_out, c.images, self.probabilities(c.logits, rows))
 
     def outcome_states(self, latent, dc, memory_out) -> tuple[torch.Tensor, torch.Tensor]:
         """K > 1: every candidate's next latent and memory trace (B, K, ...) from `candidates`'
@@ -276,10 +261,10 @@ class PredictionNet(Rollouts, nn.Module):
         k = self.outcomes.hypotheses
         if k == 1:
             dc, memory_out = self._p_step(latent, memory, image, rows)
-            difference, log_var = self.decoder.decode(dc, image)
+            difference = self.decoder(dc, image)
             next_latent = self.encoder.renormalise(latent + dc)  # eq. (2)
             drawn = apply_difference(image, difference)  # eq. (3)
-            return Step(next_latent, memory_out, drawn, difference, None, log_var)
+            return Step(next_latent, memory_out, drawn, difference)
         c = self.candidates(latent, memory, image, rows)
         picked = self.pick(c.images, c.differences, c.logits, image, rows, truth, label)
         at = torch.arange(len(image), device=image.device)
@@ -293,7 +278,6 @@ class PredictionNet(Rollouts, nn.Module):
             c.images[at, picked],  # eq. (3), drawn by the candidate
             c.differences[at, picked],
             Hypotheses(c.images, c.logits, picked),
-            None if c.log_variance is None else c.log_variance[at, picked],
         )
 
     def pick(self, candidates, differences, logits, image, rows, truth=None, label=None) -> torch.Tensor:
@@ -310,24 +294,11 @@ class PredictionNet(Rollouts, nn.Module):
     def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         """Weights of a one-hypothesis net for this one (fine-tuning the shipped net with K
         hypotheses): D's output repeated for each candidate, each a little apart so that
-        winner-takes-all can tell them apart, and the choice head as initialised (uniform).
-        Weights without a variance head for a net with one: the head as initialised."""
+        winner-takes-all can tell them apart, and the choice head as initialised (uniform)."""
         k = self.outcomes.hypotheses
         own = self.state_dict()
         state = dict(state)
-        for name in own:  # a net given a variance head: the head as initialised, the rest as trained
-            if name.startswith("decoder.variance.") and name not in state:
-                state[name] = own[name]
-        if k == 1:
-            return state
-        if "decoder.choice.weight" in state:  # already K outcomes: a head of another design starts anew
-            for name in own:  # forks made deeper (fork_blocks): the new blocks as the trunk's, exactly
-                if ".forks." in name and name not in state and self._fork_source(name) in state:
-                    state[name] = state[self._fork_source(name)].clone()
-            head = [n for n in set(own) | set(state) if n.startswith("decoder.choice")]
-            if any(n not in state or n not in own or state[n].shape != own[n].shape for n in head):
-                state = {n: v for n, v in state.items() if not n.startswith("decoder.choice")}
-                state.update({n: own[n] for n in head if n in own})
+        if k == 1 or "decoder.choice.weight" in state:  # already this many outcomes
             return state
 
         def near(w: torch.Tensor) -> torch.Tensor:  # a copy a little apart (a lone value: exact)
@@ -346,14 +317,10 @@ class PredictionNet(Rollouts, nn.Module):
         return state
 
     def _fork_source(self, name: str) -> str:
-        """The trunk's parameter a fork's parameter copies: its `before` blocks and `block` the
-        P^a's last `fork_blocks` blocks in order, its `out` the P^a's output layer."""
+        """The trunk's parameter a fork's parameter copies: its `block` the P^a's last block,
+        its `out` the P^a's output layer."""
         head, _, tail = name.partition(".forks.")
-        part = tail.split(".", 1)[1]  # "block.conv1.weight", "before.0.conv1.weight" or "out.bias"
-        first = self.config.model.p_blocks - self.outcomes.fork_blocks
+        part = tail.split(".", 1)[1]  # "block.conv1.weight" or "out.bias"
         if part.startswith("block."):
             return f"{head}.blocks.{self.config.model.p_blocks - 1}.{part[len('block.') :]}"
-        if part.startswith("before."):
-            i, rest = part[len("before.") :].split(".", 1)
-            return f"{head}.blocks.{first + int(i)}.{rest}"
         return f"{head}.{part}"

@@ -2,8 +2,7 @@
 
 What every prediction net shares once it has `encode` and `step_hypotheses`: one step's
 image and latent, and the rollout of a batch of runs of different lengths, each step from the
-previous prediction. `PredictionNet` (model.py) and `PairedNet` (paired.py) both roll out
-through it.
+previous prediction.
 """
 
 from __future__ import annotations
@@ -17,15 +16,13 @@ import torch
 class Rollout:
     """A batch rolled out (`Rollouts.rollout_hypotheses`): the predicted states (B, L, C, H, W)
     and D's differences (B, L, C+1, H, W) after each of L actions; with K > 1 hypotheses every
-    step's candidates (B, L, K, C, H, W), choice logits (B, L, K) and picks (B, L) (else None);
-    with a variance head the log sigma^2 of each state (B, L, 1, H, W) (else None)."""
+    step's candidates (B, L, K, C, H, W), choice logits (B, L, K) and picks (B, L) (else None)."""
 
     states: torch.Tensor
     differences: torch.Tensor
     candidates: torch.Tensor | None = None
     logits: torch.Tensor | None = None
     picks: torch.Tensor | None = None
-    log_variance: torch.Tensor | None = None
 
 
 class Rollouts:
@@ -84,7 +81,7 @@ class Rollouts:
         truth = None if truth is None else truth[order]
         labels = None if labels is None else labels[order]
         latent, memory = self.encode(image)
-        states = differences = candidates = logits = picks = log_vars = None
+        states = differences = candidates = logits = picks = None
         for i in range(length):
             n = int(active[i])
             if n == 0:
@@ -98,25 +95,21 @@ class Rollouts:
                 None if labels is None else labels[:n, i],
             )
             latent, memory, image, difference = step.latent, step.memory, step.image, step.difference
-            hyp, log_var = step.hypotheses, step.log_variance
-            if states is None:  # made here: under autocast the outputs may be bfloat16
+            hyp = step.hypotheses
+            if states is None:
                 states = image.new_zeros((b, length, *image.shape[1:]))
                 differences = difference.new_zeros((b, length, *difference.shape[1:]))
                 if hyp is not None:
                     candidates = hyp.candidates.new_zeros((b, length, *hyp.candidates.shape[1:]))
                     logits = hyp.logits.new_zeros((b, length, hyp.logits.shape[1]))
                     picks = hyp.picked.new_zeros((b, length))
-                if log_var is not None:
-                    log_vars = log_var.new_zeros((b, length, *log_var.shape[1:]))
             states[order[:n], i] = image
             differences[order[:n], i] = difference
             if hyp is not None:
                 candidates[order[:n], i] = hyp.candidates
                 logits[order[:n], i] = hyp.logits
                 picks[order[:n], i] = hyp.picked
-            if log_var is not None:
-                log_vars[order[:n], i] = log_var
-        return Rollout(states, differences, candidates, logits, picks, log_vars)
+        return Rollout(states, differences, candidates, logits, picks)
 
     # Training's forward pass: a call through the module (`net(...)`), so that
     # DistributedDataParallel sees it.

@@ -29,16 +29,11 @@ from torch import nn
 
 from afford.prediction.config import PredictionConfig
 from afford.prediction.layers import clamped_tanh
-from afford.prediction.variance import VarianceHead
 from afford.sim.camera import SIZE
 
 # D's mask starts nearly closed (clamped tanh(MASK_BIAS)): eq. (3) first copies the state. Not
 # fully closed, or neither the mask nor the difference would get a gradient.
 MASK_BIAS = 0.1
-
-# The choice head's designs (config.outcomes.choice_head): a linear map of each candidate's dc pooled over
-# the grid; or convolutions over the grid, on the scene's latent beside each dc, then pooled.
-CHOICE_HEADS = ("pooled", "grid")
 
 ACTIVATIONS = {"tanh": nn.Tanh, "gelu": nn.GELU, "silu": nn.SiLU}
 
@@ -148,24 +143,13 @@ def _out_conv(c: PredictionConfig) -> nn.Conv2d:
 
 
 class Fork(nn.Module):
-    """Another outcome's own end of P^a (`fork="latent"`): copies of its last `fork_blocks`
-    blocks (`before`, then `block`) and its output layer, so each candidate outcome has its own
-    dc, and the latent itself forks."""
+    """Another outcome's own end of P^a (`fork="latent"`): a copy of its last block and its
+    output layer, so each candidate outcome has its own dc, and the latent itself forks."""
 
     def __init__(self, c: PredictionConfig, act: type[nn.Module]):
         super().__init__()
-        self.before = nn.ModuleList(Block(c.model.p_channels, act) for _ in range(c.outcomes.fork_blocks - 1))
         self.block = Block(c.model.p_channels, act)
         self.out = _out_conv(c)
-
-    def ends(self) -> list[nn.Module]:
-        return [*self.before, self.block]
-
-
-def _through(blocks: list[nn.Module], h: torch.Tensor, blob: torch.Tensor) -> torch.Tensor:
-    for block in blocks:
-        h = block(h, blob)
-    return h
 
 
 class SpatialP(nn.Module):
@@ -173,7 +157,7 @@ class SpatialP(nn.Module):
 
     With `fork="latent"` and K hypotheses, dc (B, K, ...) and m_{i+1} (B, K, ...): the first
     outcome through `blocks` and `out` as with one, the others through their `forks`, which
-    branch before the last `fork_blocks` blocks.
+    branch before the last block.
     """
 
     def __init__(self, c: PredictionConfig):
@@ -189,10 +173,8 @@ class SpatialP(nn.Module):
         self.act = act()
         self.out = _out_conv(c)
         forked = c.outcomes.hypotheses if c.outcomes.fork == "latent" else 1
-        if forked > 1 and not 1 <= c.outcomes.fork_blocks <= c.model.p_blocks:
-            raise ValueError("fork=latent forks P's last fork_blocks blocks: 1 <= fork_blocks <= p_blocks")
         self.forks = nn.ModuleList(Fork(c, act) for _ in range(forked - 1))
-        self.shared = c.model.p_blocks - (c.outcomes.fork_blocks if self.forks else 0)
+        self.shared = c.model.p_blocks - (1 if self.forks else 0)
 
     def forward(self, latent: torch.Tensor, memory: torch.Tensor, vector: torch.Tensor, pixel: torch.Tensor):
         maps = action_maps(vector, pixel, self.size, self.sigma)
@@ -202,8 +184,8 @@ class SpatialP(nn.Module):
             h = block(h, blob)
         if not self.forks:
             return self._split(self.out(self.act(h)))
-        ends = [(list(self.blocks[self.shared :]), self.out)] + [(f.ends(), f.out) for f in self.forks]
-        outs = [self._split(out(self.act(_through(blocks, h, blob)))) for blocks, out in ends]
+        ends = [(self.blocks[-1], self.out)] + [(f.block, f.out) for f in self.forks]
+        outs = [self._split(out(self.act(block(h, blob)))) for block, out in ends]
         return torch.stack([o[0] for o in outs], 1), torch.stack([o[1] for o in outs], 1)
 
     def _split(self, out: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -238,45 +220,17 @@ class SpatialDecoder(nn.Module):
             self.out.bias.view(drawn, c.model.channels + 1, 4)[:, -1] = (
                 MASK_BIAS  # pixel_shuffle: channel-major
             )
-        # How sure each drawn pixel is (config.model.variance): from the same last features.
-        self.variance = VarianceHead(c.model.full_channels, drawn, act) if c.model.variance else None
-        if k > 1:  # which candidate is likely, from features pooled over the grid (mean and max)
-            if c.outcomes.choice_head not in CHOICE_HEADS:
-                raise ValueError(
-                    f"choice_head: one of {', '.join(CHOICE_HEADS)}, not {c.outcomes.choice_head!r}"
-                )
-            self.on_grid = c.outcomes.choice_head == "grid"
-            pooled = c.model.latent_channels
-            if self.on_grid:  # convolutions over the scene's latent beside each candidate's dc first
-                w = c.outcomes.choice_channels
-                self.choice_grid = nn.Sequential(
-                    _conv(2 * c.model.latent_channels, w), act(), _conv(w, w), act()
-                )
-                pooled = w
-            self.choice = nn.Linear(2 * pooled * (k // drawn), k)
+        if k > 1:  # which candidate is likely, from each dc pooled over the grid (mean and max)
+            self.choice = nn.Linear(2 * c.model.latent_channels * (k // drawn), k)
             nn.init.zeros_(self.choice.weight)
             nn.init.zeros_(self.choice.bias)
 
     def forward(self, dc: torch.Tensor, image: torch.Tensor) -> torch.Tensor:
         """(B, K * (C+1), H, W): each candidate's difference image, eq. (3)'s mask last."""
-        return self.decode(dc, image)[0]
-
-    def decode(self, dc: torch.Tensor, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor | None]:
-        """`forward`'s difference images and, with a variance head, each candidate's log
-        sigma^2 per pixel (B, K, H, W) (else None)."""
         x = torch.cat([self.up(dc), nn.functional.pixel_unshuffle(image, 2)], 1)
-        features = self.full(x)
-        difference = clamped_tanh(nn.functional.pixel_shuffle(self.out(features), 2))
-        return difference, None if self.variance is None else self.variance(features)
+        return clamped_tanh(nn.functional.pixel_shuffle(self.out(self.full(x)), 2))
 
-    def choice_logits(self, dc: torch.Tensor, latent: torch.Tensor) -> torch.Tensor:
+    def choice_logits(self, dc: torch.Tensor) -> torch.Tensor:
         """(B, K): how likely each candidate outcome is (softmax), for K > 1; dc (B, C, h, w),
-        or (B, K, C, h, w) forked in the latent (every candidate's dc seen); latent (B, C, h,
-        w): the state the step starts from (c_i), read by the "grid" head."""
-        x = dc
-        if self.on_grid:
-            forked = dc.dim() == 5
-            scene = latent.repeat_interleave(dc.shape[1], 0) if forked else latent
-            x = self.choice_grid(torch.cat([scene, dc.flatten(0, 1) if forked else dc], 1))
-            x = x.view(*dc.shape[:-3], *x.shape[1:])
-        return self.choice(torch.cat([x.mean((-2, -1)), x.amax((-2, -1))], -1).flatten(1))
+        or (B, K, C, h, w) forked in the latent (every candidate's dc seen)."""
+        return self.choice(torch.cat([dc.mean((-2, -1)), dc.amax((-2, -1))], -1).flatten(1))

@@ -16,7 +16,6 @@ from afford.data.torch_data import JoinedData, PredictionData, collate_predictio
 from afford.prediction.config import PredictionConfig
 from afford.prediction.evaluate import CHANGED
 from afford.prediction.model import PredictionNet
-from afford.prediction.variance import beta_nll
 from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
 from afford.training.loop import Loop, LoopState, run, warmup_cosine
 from afford.training.signsgd import SignSGD
@@ -29,23 +28,10 @@ def step_mask(steps: torch.Tensor, longest: int) -> torch.Tensor:
     return (torch.arange(longest, device=steps.device)[None, :] < steps[:, None]).float()
 
 
-def change_mask(images: torch.Tensor, predicted: torch.Tensor, repair: bool) -> torch.Tensor:
-    """(B, L, 1, H, W) 1 where the truth images[:, 1:] differs by more than CHANGED from each
-    step's input: the true previous state, or with `repair` the step's real input (the true
-    state at the first step, the previous prediction after)."""
-    inputs = images[:, :-1]
-    if repair:
-        inputs = torch.cat([images[:, :1], predicted[:, :-1].detach()], 1)
-    return ((images[:, 1:] - inputs).abs().amax(2, keepdim=True) > CHANGED).float()
-
-
-def coarse_error(diff: torch.Tensor, px: int) -> torch.Tensor:
-    """The absolute error of (..., C, H, W) differences averaged over px x px blocks first:
-    summed over channels, mean over blocks (...). Where an object is drawn inside the block it
-    lands in, its pixels cancel; where it is missing, they count in full."""
-    lead = diff.shape[:-3]
-    pooled = nn.functional.avg_pool2d(diff.flatten(0, -4), px)
-    return pooled.abs().sum(1).mean((-2, -1)).view(lead)
+def change_mask(images: torch.Tensor) -> torch.Tensor:
+    """(B, L, 1, H, W) 1 where the truth images[:, 1:] differs by more than CHANGED from the
+    true previous state."""
+    return ((images[:, 1:] - images[:, :-1]).abs().amax(2, keepdim=True) > CHANGED).float()
 
 
 def sequence_loss(
@@ -64,63 +50,36 @@ def sequence_loss(
     mask is shut: through eq. (3) alone, a closed mask passes no gradient to the values it
     would let through, and values that never learn give the mask no reason to open.
 
-    "Where it changed" is measured from the true previous state, or with `config.loss.repair` from
-    the step's own input (the previous prediction): then the mask is also taught to open, and
-    D to redraw, where an earlier step left an error (a ghost, a blurred object), instead of
-    being taught to keep such errors shut in, so they stop compounding through eq. (3).
-
-    `effects` (B, L, H, W), with `config.loss.effect`: 1 on the pixels where each step had a
-    side effect (data/effects.py). There the squared error is added again, as a mean over those
-    pixels alone: a ball that rolls off covers a few hundred of 16,384 pixels, so in the mean
-    over the image it weighs nothing, and the squared error (the mean outcome) rather than the
-    absolute error (the median) keeps an effect that follows in fewer than half of similar
-    cases from being drawn as not happening.
-
-    With `config.loss.coarse`, the absolute error over blocks (`coarse_error`) is added: it
-    charges a missing object, not one drawn a few pixels off.
+    `effects` (B, L, H, W): 1 on the pixels where each step had a side effect (data/effects.py);
+    with hypotheses_by=effect they label which candidate each step carries on.
 
     `net`: a PredictionNet, or one wrapped for DistributedDataParallel (called, not its methods).
     """
     c = getattr(net, "module", net).config
     truth = images[:, 1:]
     many = c.outcomes.hypotheses > 1
-    # A variance head trained alone learns the error of the outcome the net carries on when it
-    # plans (its own pick), not of the one the truth or a label would pick.
-    own_pick = c.training.trained == "variance"
     labels = None
-    if (
-        many and c.outcomes.hypotheses_by == "effect" and effects is not None and not own_pick
-    ):  # else the winner
+    if many and c.outcomes.hypotheses_by == "effect" and effects is not None:  # else the winner
         labels = effects.flatten(2).any(-1)  # (B, L): the step had a side effect
-    with torch.autocast(images.device.type, dtype=torch.bfloat16, enabled=c.training.bf16):
-        rolled = net(images[:, 0], actions, steps, truth if many and not own_pick else None, labels)
-        predicted, differences, candidates = rolled.states, rolled.differences, rolled.candidates
-        logits, picks, log_vars = rolled.logits, rolled.picks, rolled.log_variance
-    predicted, differences = predicted.float(), differences.float()
+    rolled = net(images[:, 0], actions, steps, truth if many else None, labels)
+    predicted, differences, candidates = rolled.states, rolled.differences, rolled.candidates
+    logits, picks = rolled.logits, rolled.picks
     diff = predicted - truth
     err = c.loss.mse * (diff**2).sum(2).mean((-2, -1))  # (B, L)
     if c.loss.l1:
         err = err + c.loss.l1 * diff.abs().sum(2).mean((-2, -1))
     if c.loss.mask or c.loss.values:
-        changed = change_mask(images, predicted, c.loss.repair)
+        changed = change_mask(images)
         if c.loss.mask:
             err = err + c.loss.mask * ((differences[:, :, -1:] - changed) ** 2).mean((-3, -2, -1))
         if c.loss.values:
             values = (differences[:, :, :-1] - truth).abs().sum(2, keepdim=True) * changed
             err = err + c.loss.values * values.sum((-3, -2, -1)) / changed.sum((-3, -2, -1)).clamp_min(1.0)
-    if c.loss.effect and effects is not None:
-        on = effects.float()
-        squared = (diff**2).sum(2) * on
-        err = err + c.loss.effect * squared.sum((-2, -1)) / on.sum((-2, -1)).clamp_min(1.0)
-    if c.loss.coarse:
-        err = err + c.loss.coarse * coarse_error(diff, c.loss.coarse_px)
     if many:  # the terms above are the winner's (winner-takes-all); every candidate learns a little
-        others = (candidates.float() - truth[:, :, None]).abs().sum(3).mean((-2, -1))  # (B, L, K)
+        others = (candidates - truth[:, :, None]).abs().sum(3).mean((-2, -1))  # (B, L, K)
         err = err + c.loss.others * others.mean(-1)
-        choice = nn.functional.cross_entropy(logits.float().flatten(0, 1), picks.flatten(), reduction="none")
+        choice = nn.functional.cross_entropy(logits.flatten(0, 1), picks.flatten(), reduction="none")
         err = err + c.loss.choice * choice.view_as(err)
-    if c.loss.nll and log_vars is not None:  # the variance head learns the error of the image held fixed
-        err = err + c.loss.nll * beta_nll(predicted, log_vars.float(), truth, c.loss.nll_beta).mean((-2, -1))
     mask = step_mask(steps, actions.shape[1])
     return (err * mask).sum() / mask.sum()
 
@@ -189,28 +148,8 @@ def run_sampler(parts: list[PredictionData], config: PredictionConfig, seed: int
     return share_sampler({what: np.array(f) for what, f in flags.items()}, asked, seed)
 
 
-# config.training.trained -> whether a parameter (by name) learns.
-TRAINED = {
-    "all": lambda name: True,
-    "outcomes": lambda name: ".forks." in name or name.startswith("decoder.choice"),
-    "head": lambda name: name.startswith("decoder.choice"),
-    # The side-effect outcome's own layers (fork=latent): the canonical outcome and the head's
-    # weights stay as they were (its scores still move: the head reads each outcome's dc).
-    "side": lambda name: ".forks." in name,
-    "variance": lambda name: name.startswith("decoder.variance"),
-}
-
-
 def make_optimizer(net: PredictionNet, config: PredictionConfig) -> torch.optim.Optimizer:
-    if config.training.trained not in TRAINED:
-        raise ValueError(f"trained: one of {', '.join(TRAINED)}, not {config.training.trained!r}")
-    for name, parameter in net.named_parameters():  # the rest is fixed: no gradient is kept
-        parameter.requires_grad_(TRAINED[config.training.trained](name))
-    params = [p for p in net.parameters() if p.requires_grad]
-    if not params:
-        raise ValueError(
-            f"trained={config.training.trained!r} leaves nothing to train in this net (fork=latent?)"
-        )
+    params = list(net.parameters())
     if config.training.optimizer == "signsgd":
         return SignSGD(params, lr=config.training.lr)
     if config.training.optimizer == "adam":
@@ -245,9 +184,6 @@ def train(
         angle_noise=config.sampling.angle_noise,
     )
     by_effect = config.outcomes.hypotheses > 1 and config.outcomes.hypotheses_by == "effect"
-    if by_effect and config.loss.effect and config.loss.effect_region != "effects":
-        raise ValueError("hypotheses_by=effect labels steps by their effect masks: effect_region=effects")
-    region = config.loss.effect_region if config.loss.effect else ("effects" if by_effect else None)
     parts = [
         PredictionData(
             d,
@@ -255,7 +191,7 @@ def train(
             config.sampling.max_steps,
             augment,
             seed=[stream, j] if j else stream,
-            effect_masks=region,
+            effect_masks=by_effect,
         )
         for j, d in enumerate([data, *(Dataset(more) for more in more_data)])
     ]
@@ -273,7 +209,7 @@ def train(
         "val",
         config.sampling.max_steps,
         random_start=False,
-        effect_masks="effects" if by_effect else None,
+        effect_masks=by_effect,
     )
     picks = np.linspace(0, len(val_set) - 1, min(VAL_RUNS, len(val_set))).astype(int)
     val_batch = to_device(collate_prediction([val_set[int(i)] for i in picks]), world.device)
@@ -298,7 +234,7 @@ def train(
         **workers,
     )
     net = PredictionNet(config).to(world.device)
-    opt = make_optimizer(net, config)  # first: it fixes what does not learn, before DDP sees it
+    opt = make_optimizer(net, config)
     model = wrap(net, world, idle_parameters=True)
 
     def train_step(batch):

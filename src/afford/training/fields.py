@@ -109,8 +109,11 @@ def _value(value):
 def from_dict(cls: type, stored: dict):
     """A `cls` from a stored dict: grouped ({"training": {"lr": ...}}) or flat ({"lr": ...},
     as the shipped files store them); a group's entries first, then flat names. Unknown keys,
-    from an older or newer afford, are ignored; JSON lists come back as tuples."""
+    from an older or newer afford, are ignored, but for the fields `cls.removed` names: a stored
+    value other than the one this code runs raises ValueError, since the net it describes would
+    load with parts missing or train another way. JSON lists come back as tuples."""
     known, records = paths(cls), groups(cls)
+    check_removed(cls, stored)
     changes: dict[str, object] = {}
     for key, value in stored.items():
         if key in records and isinstance(value, dict):
@@ -119,6 +122,22 @@ def from_dict(cls: type, stored: dict):
         if key not in records and key in known:
             changes[".".join(known[key])] = _value(value)
     return with_fields(cls(), **changes)
+
+
+def check_removed(cls: type, stored: dict) -> None:
+    """ValueError where a stored config sets a field `cls.removed` names (flat, or in a group
+    under its own name or its flat one) to other than the one value this code runs."""
+    removed = getattr(cls, "removed", {})
+    entries = list(stored.items())
+    for group, values in stored.items():
+        if group in groups(cls) and isinstance(values, dict):
+            entries += [(k, v) for k, v in values.items()] + [(f"{group}_{k}", v) for k, v in values.items()]
+    for key, value in entries:
+        if key in removed and _value(value) != removed[key]:
+            raise ValueError(
+                f"{key}={value!r} asks for a feature this afford does not hold (it runs "
+                f"{key}={removed[key]!r}); the experiment pages name the commit that has it"
+            )
 
 
 def merged(cls: type, stored: dict, changes: dict) -> dict:

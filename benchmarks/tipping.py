@@ -1,7 +1,7 @@
 """Where along a block resting off its centre does a place tip it: the simulator and the dynamics.
 
     python benchmarks/tipping.py --weights src/afford/weights/objects/dynamics.safetensors \
-        [--weights runs/dyn-seed1/best.safetensors ...] [--ensemble] [--start true|perceived|both] \
+        [--weights runs/dyn-seed1/best.safetensors ...] [--start true|perceived|both] \
         [--perception FILE] \
         [--out docs/objects-tipping.png] [--json]
 
@@ -175,9 +175,6 @@ def main() -> int:
         "--weights", action="append", required=True, metavar="FILE", help="a dynamics net; repeat for more"
     )
     parser.add_argument(
-        "--ensemble", action="store_true", help="also the nets judged together (objects/ensemble.py)"
-    )
-    parser.add_argument(
         "--start",
         choices=("true", "perceived", "both"),
         default="both",
@@ -207,7 +204,6 @@ def label(weights: str) -> str:
 
 
 def run(args) -> None:
-    from afford.objects.ensemble import DynamicsEnsemble
     from afford.objects.train import load_dynamics
     from afford.sim.scene import Scene
 
@@ -216,8 +212,6 @@ def run(args) -> None:
         raise UserError(f"two weights files share a name in the table: {', '.join(labels)}")
     nets = {name: load_dynamics(w) for name, w in zip(labels, args.weights, strict=True)}
     models = dict(nets)
-    if args.ensemble:
-        models["judged together"] = DynamicsEnsemble(list(nets.values()))
     scene = Scene()
     from afford.objects.perception_train import load_perception
     from afford.shipped import load_object_perception

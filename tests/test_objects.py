@@ -20,15 +20,11 @@ from afford.objects.dynamics import (
     ObjectDynamics,
     encode_inputs,
     encode_targets,
-    foresight_inputs,
-    frame_coordinates,
-    mirror,
     mixture_loss,
     predict,
 )
-from afford.objects.state import KINDS, N_SLOTS, SLOT_KIND, axes_quat, quat_axes, slot_features
+from afford.objects.state import SLOT_KIND, axes_quat, quat_axes, slot_features
 from afford.objects.transitions import read_transitions
-from afford.sim.affordance import AFF_WIDTH, Col
 from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
 
 TINY = dataclasses.replace(PRESETS["tiny"], threads=1)
@@ -68,7 +64,6 @@ def test_a_pose_only_dataset_says_it_has_no_images(pose_dataset):
         generate(pose_dataset, GenerateConfig(sequences=8, seed=3, workers=1, shard_size=4), progress=False)
     t = read_transitions(pose_dataset)
     assert len(t) == sum(data.sequence(i).length for i in range(8))
-    assert not np.isnan(t.paths).any()
 
 
 def test_axes_give_back_the_quaternion():
@@ -78,16 +73,6 @@ def test_axes_give_back_the_quaternion():
     up, along = quat_axes(q)
     back = axes_quat(up, along)
     np.testing.assert_allclose(np.abs((back * q).sum(1)), 1.0, atol=1e-9)  # q and -q are one pose
-
-
-def test_mirroring_twice_is_the_identity(pose_dataset):
-    t = read_transitions(pose_dataset)
-    once = mirror(t.before, t.after, t.actions, t.paths)
-    twice = mirror(*once)
-    for a, b in zip(twice, (t.before, t.after, t.actions, t.paths), strict=True):
-        np.testing.assert_allclose(np.cos(np.radians(a)), np.cos(np.radians(b)), atol=1e-4)  # yaws wrap
-        np.testing.assert_allclose(np.sin(np.radians(a)), np.sin(np.radians(b)), atol=1e-4)
-    assert not np.allclose(once[0][:, :, 0], t.before[:, :, 0], equal_nan=True)
 
 
 def test_features_mark_absent_and_held_objects(pose_dataset):
@@ -101,20 +86,17 @@ def test_features_mark_absent_and_held_objects(pose_dataset):
         assert f[i, t.held_before[i], 1] == 1 and f[i, :, 1].sum() == 1
 
 
-@pytest.mark.parametrize("frames", [False, True])
-def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset, frames):
+def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset):
     torch.manual_seed(0)
     t = read_transitions(pose_dataset)
-    config = dataclasses.replace(TINY, arm_path=True, outcomes=2, frames=frames)
+    config = dataclasses.replace(TINY, outcomes=2)
     net = ObjectDynamics(config)
-    inputs = encode_inputs(t.before, t.held_before, t.actions, t.paths, config)
+    inputs = encode_inputs(t.before, t.held_before, t.actions)
     targets = encode_targets(t.before, t.after, t.held_after, config)
-    targets["path"] = inputs["path"]
     out = net(inputs)
     n, s = t.before.shape[:2]
     assert out["dpos"].shape == (n, s, 2, 3) and out["outcome"].shape == (n, 2)
     opt = torch.optim.Adam(net.parameters(), lr=3e-3)
-    first_path = mixture_loss(net(inputs), targets, config.spread)[1]["path"]
     losses = []
     for _ in range(60):
         loss, _ = mixture_loss(net(inputs), targets, config.spread)
@@ -124,40 +106,8 @@ def test_dynamics_shapes_gradients_and_a_falling_loss(pose_dataset, frames):
         opt.step()
     assert all(p.grad is not None for p in net.parameters())
     assert losses[-1] < 0.5 * losses[0]
-    # Without a recorded path the net foresees one (as a planner needs), and its foresight
-    # learned too.
-    _, parts = mixture_loss(net(inputs), targets, config.spread)
-    assert parts["path"] < first_path
     foreseen = predict(net, t.before, t.held_before, t.actions)
     assert foreseen.poses.shape == (n, 2, s, 7)
-
-
-def test_frame_coordinates_follow_the_object():
-    # A block along y (turned a quarter about z): a point 3 cm further along y lies 3 cm along
-    # its length; one 2 cm above, 2 cm up its axis; turning the block turns nothing else.
-    quarter = np.array([np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)])
-    up, along = quat_axes(quarter)
-    offsets = np.array([[0.0, 0.03, 0.0], [0.0, 0.0, 0.02], [0.01, 0.0, 0.0]])
-    got = frame_coordinates(offsets, up, along)
-    np.testing.assert_allclose(got, [[0.03, 0, 0], [0, 0, 0.02], [0, -0.01, 0]], atol=1e-12)
-
-
-def test_the_arm_foresight_reads_what_a_grasp_closes_on():
-    # A ball 1 cm from a grasp's point, a cup 10 cm off, the block held in the other row.
-    before = np.full((2, N_SLOTS, 7), np.nan)
-    ball, cup, block = (int(np.flatnonzero(SLOT_KIND == KINDS.index(k))[0]) for k in ("ball", "cup", "block"))
-    before[:, ball] = [0.50, 0.00, 0.03, 1, 0, 0, 0]
-    before[:, cup] = [0.60, 0.00, 0.05, 1, 0, 0, 0]
-    before[1, block] = [0.40, 0.10, 0.30, 1, 0, 0, 0]
-    actions = np.zeros((2, AFF_WIDTH), np.float32)
-    actions[:, Col.POSITION] = [0.51, 0.00, 0.03]
-    f = foresight_inputs(before, np.array([-1, block]), actions)
-    kinds = 1 + len(KINDS)
-    held, under = f[:, -2 * kinds : -kinds], f[:, -kinds:]
-    assert held[0].argmax() == 0 and held[1].argmax() == 1 + KINDS.index("block")
-    assert under[0].argmax() == 1 + KINDS.index("ball") and under[1].argmax() == 1 + KINDS.index("ball")
-    actions[:, Col.X] = 0.30  # nothing within the grasp radius
-    assert foresight_inputs(before, np.array([-1, block]), actions)[:, -kinds:].argmax(1).tolist() == [0, 0]
 
 
 def test_the_gate_copies_still_objects_exactly(pose_dataset):
@@ -256,6 +206,27 @@ def test_train_and_eval_dynamics_from_the_command_line(pose_dataset, tmp_path, c
     assert "not a dynamics one" in capsys.readouterr().err
 
 
+def test_a_dynamics_run_started_from_weights_begins_where_they_left_off(pose_dataset, tmp_path):
+    from afford.objects.train import train
+    from afford.training.checkpoint import read_checkpoint
+
+    run = tmp_path / "run"
+    train([pose_dataset], TINY, run, progress=False)
+    # with no step size, a run started from those weights ends where it began
+    again = tmp_path / "again"
+    train(
+        [pose_dataset],
+        dataclasses.replace(TINY, steps=1, lr=0.0),
+        again,
+        progress=False,
+        init=run / "best.safetensors",
+    )
+    first, _ = read_checkpoint(run / "best.safetensors", "dynamics")
+    then, _ = read_checkpoint(again / "last.safetensors", "dynamics")
+    weights = [k for k in first if k.startswith("model.")]
+    assert weights and all(torch.equal(first[k], then[k]) for k in weights)
+
+
 def test_a_temperature_is_fitted_back_and_predict_applies_it(pose_dataset):
     from afford.objects.calibration import fit_temperature, log_loss
 
@@ -319,16 +290,16 @@ def test_a_shard_without_masks_in_a_masked_dataset_is_made_again(tmp_path):
 
 def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     from afford.objects.perception import (
+        HEADS,
         NO_POSTURE,
         PerceptionNet,
         fold_batch_norms,
-        heads_of,
         loss,
         targets,
     )
     from afford.objects.perception import PRESETS as SEEING
     from afford.objects.perception_train import batch_of, states_of
-    from afford.objects.state import POSTURES, SLOT_KIND
+    from afford.objects.state import POSTURES
 
     root = tmp_path / "m"
     generate(root, GenerateConfig(sequences=2, seed=3, workers=1, shard_size=2, masks=True), progress=False)
@@ -338,7 +309,7 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     torch.manual_seed(0)
     net = PerceptionNet(config)
     out = net(images)
-    assert {k: v.shape[1] for k, v in out.items()} == heads_of(config)
+    assert {k: v.shape[1] for k, v in out.items()} == HEADS
     # posture is a class on the pixels of cups, supports and the block, and on no others
     seq = data.sequence(0)
     masks = seq.masks[:1]
@@ -368,114 +339,6 @@ def test_perception_shapes_posture_targets_and_a_falling_loss(tmp_path):
     assert not any(isinstance(m, torch.nn.BatchNorm2d) for m in folded.modules())
     for key, value in before.items():
         assert torch.allclose(value, after[key], atol=1e-4), key
-
-
-def test_outline_pixels_weigh_more_only_when_asked():
-    import torch.nn.functional as F
-
-    from afford.objects.perception import NO_POSTURE, SEG_WEIGHT, PerceptionConfig, heads_of, loss, outlines
-
-    masks = np.full((1, 6, 6), -1)
-    masks[0, 2:4, 1:3] = 0  # a 2 x 2 object beside another
-    masks[0, 2:4, 3:5] = 4
-    edge = outlines(masks)[0]
-    assert edge[2:4, 1:5].all()  # every pixel of two 2 x 2 objects touches another or the table
-    assert edge[1, 1] and edge[4, 4] and not edge[0, 0] and not edge[5, 5]
-    torch.manual_seed(0)
-    seg = torch.from_numpy(np.where(masks >= 0, 1 + (masks > 0), 0))
-    t = {"seg": seg, "edge": torch.from_numpy(outlines(masks))}
-    # every other head's target at zero, the net's outputs drawn at random, per the heads' sizes
-    heads = heads_of(PerceptionConfig())
-    t |= {k: torch.zeros(1, c, 6, 6) for k, c in heads.items() if k not in ("seg", "posture")}
-    t["posture"] = torch.full((1, 6, 6), NO_POSTURE)
-    out = {k: torch.randn(1, c, 6, 6) for k, c in heads.items()}
-    _, plain = loss(out, t)
-    assert np.isclose(plain["seg"], float(F.cross_entropy(out["seg"], seg, weight=SEG_WEIGHT)), rtol=1e-5)
-    _, weighted = loss(out, t, edge_weight=4.0)
-    assert not np.isclose(weighted["seg"], plain["seg"]) and weighted["heat"] == plain["heat"]
-
-
-def test_a_support_under_the_block_is_a_hidden_object_to_learn_and_to_decode(scene):
-    from scenarios import SUPPORT_TOP
-
-    from afford.data.draws import pose_array
-    from afford.objects.perceive import SeenObject, _hidden_objects, by_slot
-    from afford.objects.perception import (
-        CHANNELS,
-        HEADS,
-        PRESETS,
-        PerceptionNet,
-        heads_of,
-        loss,
-        targets,
-    )
-    from afford.objects.perception_measure import match_hidden
-    from afford.objects.state import POS_SCALE
-    from afford.sim.camera import world_to_pixel
-    from afford.sim.scene import ObjectSpec as O
-    from afford.training.checkpoint import load_model_state
-
-    scene.reset([O.upright("support", 0.01, 0.30), O.upright("block", 0.0, 0.30, 0.0, z=SUPPORT_TOP)])
-    mask, poses = scene.instance_mask()[None], pose_array(scene)[None]
-    support = [n for n, _ in scene.slots].index("support0")
-    assert not (mask == support).any()  # no pixel of it shows
-    t = targets(mask, poses, np.array([-1]), sigma_px=1.5)
-    col, row = np.floor(world_to_pixel(poses[0, support, :3].astype(float))).astype(int)
-    kind = KINDS.index("support")
-    assert t["hidden"][0, kind, row, col] == 1.0 and t["hidden"][0, kind].sum() > 1  # its peak
-    assert t["hidden"][0, [k for k in range(len(KINDS)) if k != kind]].max() == 0  # the block shows
-    assert t["hidden_at"][0, row, col] == 1 and t["hidden_pose"][0, 0, row, col] == pytest.approx(
-        poses[0, support, 2] * POS_SCALE
-    )
-    # a net with the hidden heads: their outputs, and a loss that falls
-    config = dataclasses.replace(PRESETS["tiny"], hidden=True)
-    torch.manual_seed(0)
-    net = PerceptionNet(config)
-    image = torch.from_numpy(scene.observe().transpose(2, 0, 1)[None].copy())
-    assert {k: v.shape[1] for k, v in net(image).items()} == heads_of(config) == HEADS
-    opt = torch.optim.Adam(net.parameters(), lr=3e-3)
-    first = None
-    for _ in range(20):
-        total, parts = loss(net(image), t)
-        opt.zero_grad()
-        total.backward()
-        opt.step()
-        first = first if first is not None else (parts["hidden"], parts["hidden_pose"])
-    assert parts["hidden"] < first[0] and parts["hidden_pose"] < first[1]
-    # a net without them fine-tunes into one with them: the heads it had are kept
-    plain = PerceptionNet(dataclasses.replace(config, hidden=False))
-    load_model_state(net, {f"model.{k}": v for k, v in plain.state_dict().items()}, "plain")
-    net.eval(), plain.eval()
-    with torch.no_grad():
-        a, b = net(image), plain(image)
-    assert all(torch.equal(a[k], b[k]) for k in b)
-    # with hidden_trains_trunk off, the hidden heads' loss leaves the features they read alone
-    apart = PerceptionNet(dataclasses.replace(config, hidden_trains_trunk=False))
-    load_model_state(apart, {f"model.{k}": v for k, v in plain.state_dict().items()}, "plain")
-    with torch.no_grad():
-        apart.hidden_head.weight.normal_()  # as after some training: gradients flow back
-    for m in (apart, plain):
-        m.train()
-        m.zero_grad()
-        loss(m(image), t)[0].backward()
-    assert torch.allclose(apart.stem[0].weight.grad, plain.stem[0].weight.grad)
-    assert apart.hidden_head.weight.grad.abs().sum() > 0
-    # decoding: a hidden peak is an object at its pixel and height; one beside a seen object
-    # of its kind is that object
-    pixels = np.zeros((128, 128, sum(HEADS.values())), np.float32)
-    pixels[row, col, CHANNELS["hidden_z"]] = poses[0, support, 2] * POS_SCALE
-    pixels[row, col, CHANNELS["hidden_up"]] = [0, 0, 1]
-    pixels[row, col, CHANNELS["hidden_along"].start] = 1.0  # along x
-    found = _hidden_objects(pixels, np.array([[kind, row, col]]), np.array([0.8]), [])
-    assert len(found) == 1 and found[0].hidden and not found[0].mask.any()
-    np.testing.assert_allclose(found[0].position, poses[0, support, :3], atol=0.004)  # a pixel is 5 mm
-    seen = SeenObject("support", np.array([col + 1.5, row + 0.5]), poses[0, support, :3], *([None] * 3), 0, 1)
-    assert _hidden_objects(pixels, np.array([[kind, row, col]]), np.array([0.8]), [seen]) == []
-    pairs, unseen = match_hidden(found, poses[0], mask[0], held=-1)
-    assert unseen == [support] and pairs == {support: 0}
-    # a guess at a hidden support never takes the slot of a support that shows
-    shown = [dataclasses.replace(found[0], hidden=False, score=0.3 + k / 10) for k in range(2)]
-    assert all(o is None or not o.hidden for o in by_slot([dataclasses.replace(found[0], score=0.9), *shown]))
 
 
 @pytest.mark.parametrize("name", ["upright", "tipped", "lying"])

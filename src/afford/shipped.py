@@ -26,7 +26,6 @@ CONTINUOUS = WEIGHTS / "continuous"
 OBJECTS = WEIGHTS / "objects"
 PERCEPTION_FILE = "perception.safetensors"
 DYNAMICS_FILE = "dynamics.safetensors"
-OBJECT_MEMBERS_DIR = "ensemble"  # more dynamics nets beside DYNAMICS_FILE, judged with it
 
 
 def _object_net(weights: str | Path | None, name: str, fallback: bool) -> Path:
@@ -43,17 +42,10 @@ def load_object_perception(weights: str | Path | None = None, fallback: bool = F
 
 
 def load_object_dynamics(weights: str | Path | None = None, fallback: bool = False):
-    """The object dynamics net (P^a over objects) from a weights folder (default: the shipped
-    one); with the folder's ensemble/ members beside it, all of them judged together
-    (`objects/ensemble.py`)."""
-    from afford.objects.ensemble import DynamicsEnsemble
+    """The object dynamics net (P^a over objects) from a weights folder (default: the shipped one)."""
     from afford.objects.train import load_dynamics
 
-    path = _object_net(weights, DYNAMICS_FILE, fallback)
-    members = sorted((Path(weights or OBJECTS) / OBJECT_MEMBERS_DIR).glob("*.safetensors"))
-    if not members:
-        return load_dynamics(path)
-    return DynamicsEnsemble([load_dynamics(p) for p in (path, *members)])
+    return load_dynamics(_object_net(weights, DYNAMICS_FILE, fallback))
 
 
 def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:

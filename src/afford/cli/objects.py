@@ -12,7 +12,6 @@ def cmd_train_dynamics(args) -> int:
     from afford.objects.calibration import CALIBRATION_FILE
     from afford.objects.dynamics import PRESETS
     from afford.objects.train import train
-    from afford.shipped import OBJECTS, PERCEPTION_FILE
     from afford.training.overrides import apply_overrides, preset_config
 
     config = preset_config(PRESETS, args.preset, steps=args.steps, threads=args.threads)
@@ -26,8 +25,6 @@ def cmd_train_dynamics(args) -> int:
             args.out,
             not args.json,
             args.fraction,
-            perceived_dirs=args.perceived_data or (),
-            perception=args.perception or str(OBJECTS / PERCEPTION_FILE),
             init=args.init,
         )
     except KeyboardInterrupt:
@@ -60,8 +57,7 @@ def cmd_train_dynamics(args) -> int:
 
 
 def cmd_eval_dynamics(args) -> int:
-    from afford.objects.ensemble import DynamicsEnsemble
-    from afford.objects.measure import measure, net_predictor, simulator_predictor, table
+    from afford.objects.measure import measure, simulator_predictor, table
     from afford.objects.train import load_dynamics
     from afford.objects.transitions import read_transitions
 
@@ -74,14 +70,7 @@ def cmd_eval_dynamics(args) -> int:
     if args.simulator:
         predictor = simulator_predictor()
     else:
-        nets = [load_dynamics(w) for w in args.weights]
-        for w, n in zip(args.weights, nets, strict=True):
-            if args.recorded_arm_path and not n.config.arm_path:
-                raise CLIError(f"--recorded-arm-path: {w} does not take the arm's path")
-        net = nets[0] if len(nets) == 1 else DynamicsEnsemble(nets)
-        if args.recorded_arm_path and t.paths.size and (t.paths != t.paths).any():
-            raise CLIError(f"{args.data}: no arm paths recorded, and --recorded-arm-path asks for them")
-        predictor = net_predictor(net, recorded_paths=args.recorded_arm_path)
+        predictor = load_dynamics(args.weights).outcomes
     before, seen_by = None, "true"
     if args.perception:
         before, seen_by = perceived_starts(args.perception, args.data, t), str(args.perception)
@@ -89,7 +78,7 @@ def cmd_eval_dynamics(args) -> int:
     if args.pictures:
         report["pictures"] = dynamics_pictures(predictor, t, before, args.pictures)
     report = {
-        "model": "simulator" if args.simulator else " + ".join(map(str, args.weights)),
+        "model": "simulator" if args.simulator else str(args.weights),
         "data": str(args.data),
         "split": args.split,
         "start": seen_by,
@@ -116,7 +105,7 @@ def dynamics_pictures(predictor, t, before, out: str, count: int = 8) -> str:
         return "none: no execution with a side effect"
     start = t.before if before is None else before
     sub = t.subset(np.array(rows))
-    poses, _ = predictor(start[rows], sub.held_before, sub.actions, sub.paths).likeliest()
+    poses, _ = predictor(start[rows], sub.held_before, sub.actions).likeliest()
     drawer = Drawer()
     pictures = [
         moved(drawer.render(sub.before[i], int(sub.held_before[i])), sub.before[i], sub.after[i], poses[i])
@@ -224,19 +213,6 @@ def add_train_parser(tsub) -> None:
         "--more-data", action="append", metavar="DIR", help="also train on this dataset's train split"
     )
     p.add_argument(
-        "--perceived-data",
-        action="append",
-        metavar="DIR",
-        help="also train on this dataset's executions (it needs images and instance masks) started from "
-        "the objects the perception net sees in each start image, as a planner starts: a share "
-        "(perceived_share, default 0.25) of each batch; repeatable",
-    )
-    p.add_argument(
-        "--perception",
-        metavar="FILE",
-        help="the perception net for --perceived-data (default: the shipped one)",
-    )
-    p.add_argument(
         "--init", metavar="FILE", help="a new run starts from these dynamics weights (fine-tuning)"
     )
     p.add_argument("--out", required=True, metavar="RUN", help="run folder (checkpoints, logs)")
@@ -247,7 +223,7 @@ def add_train_parser(tsub) -> None:
         "--set",
         action="append",
         metavar="KEY=VALUE",
-        help="change one field of the preset's config (repeatable), e.g. --set arm_path=true",
+        help="change one field of the preset's config (repeatable), e.g. --set rounds=3",
     )
     p.add_argument(
         "--fraction", type=float, metavar="F", help="train on this share of the executions (a learning curve)"
@@ -289,13 +265,7 @@ def add_eval_parser(esub) -> None:
         "shares within 3 px and 0.5 px, the best of the K outcomes; beside copying the start. Also the "
         "off-the-table F1 and the calibration of the outcomes' probabilities.",
     )
-    p.add_argument(
-        "--weights",
-        nargs="+",
-        metavar="FILE",
-        help="a dynamics checkpoint or weights file; several: an ensemble, their predictions fused "
-        "object by object (objects/ensemble.py)",
-    )
+    p.add_argument("--weights", metavar="FILE", help="a dynamics checkpoint or weights file")
     p.add_argument(
         "--simulator",
         action="store_true",
@@ -318,12 +288,6 @@ def add_eval_parser(esub) -> None:
         "images and masks) instead of the true states",
     )
     p.add_argument("--pictures", metavar="FILE.png", help="draw 8 executions with side effects here")
-    p.add_argument(
-        "--recorded-arm-path",
-        action="store_true",
-        help="give a net that takes the arm's path the recorded one, not its own foresight (a "
-        "diagnostic: a planner has only the foresight)",
-    )
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_eval_dynamics)
 
@@ -334,8 +298,7 @@ def add_eval_parser(esub) -> None:
         "`afford generate --masks`) and report: the share of visible objects (20 pixels or more) found, "
         "spurious objects per image, kind right, centre error in the image (median, 95th percentile) "
         "and in 3D, upright / tipped / lying right, the block's tilt, mask IoU, the held object right, "
-        "and images per second; for a net with the hidden heads (`--set hidden=true`), the share of "
-        "the objects no pixel shows that they find, how far off, and their phantoms per image.",
+        "and images per second.",
     )
     q.add_argument("--weights", required=True, metavar="FILE", help="a perception checkpoint or weights file")
     q.add_argument("--data", required=True, metavar="DIR")

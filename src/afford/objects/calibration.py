@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from afford.objects.dynamics import ObjectDynamics
-from afford.objects.measure import nearest_share, net_predictor, predict_all
+from afford.objects.measure import nearest_share, predict_all
 from afford.objects.transitions import Transitions
 
 CALIBRATION_FILE = "calibration.json"  # in a training run, written when `afford train dynamics` ends
@@ -44,7 +44,7 @@ class TemperatureFit:
 def logits_and_shares(net: ObjectDynamics, t: Transitions) -> tuple[np.ndarray, np.ndarray]:
     """(N, K) the head's logits (at temperature 1) and (N, K) each outcome's nearest share, for
     the executions of `t` whose outcomes differ."""
-    outcomes = predict_all(net_predictor(net), t)
+    outcomes = predict_all(net.outcomes, t)
     # softmax(z / T) = p, so z = T log p up to a constant per execution, which softmax ignores
     logits = np.log(np.clip(outcomes.probability, 1e-12, 1.0)) * net.config.outcome_temperature
     shares = np.stack(

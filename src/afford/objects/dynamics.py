@@ -2,11 +2,7 @@
 outcomes where one start can go two ways.
 
 Each object is a node. Its input is its own state (`state.slot_features`), where it lies from
-the affordance's point, the affordance itself and, optionally, the arm's path seen from the
-object (the arm is what pushes and sweeps). The arm moves by script, so its path follows from
-the affordance and what the gripper carries or closes on: a net with the path as an input also
-learns to foresee it (`foresee`), and takes its own foresight wherever no path is given, as
-in planning, where no execution has been recorded yet. Rounds of pairwise messages (an interaction
+the affordance's point, and the affordance itself. Rounds of pairwise messages (an interaction
 network: a message from every other object, summed, then a residual update of each node) let
 an object's fate depend on what touches it. Each node then says, per outcome: does it move
 (the gate), does it leave the table, is it held, and if it moves, its change in position and
@@ -19,6 +15,7 @@ counterpart of eq. (3)'s mask: only what moves is predicted).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import torch
@@ -38,18 +35,9 @@ from afford.objects.state import (
 )
 from afford.sim.affordance import Col
 from afford.sim.affordances import TYPES
-from afford.sim.arm_path import PATH_POINTS
-from afford.sim.constants import GRASPABLE, MOTION
 
 ACTION_FEATURES = 3 + 4 + 3 + 1  # position, angle (once and twice round), turn, symmetric
 RELATIVE = 4  # the object from the affordance's point: dx, dy, dz, planar distance
-FRAME = 3  # a point in an object's own frame: along its length, across it, up its axis
-PATH_FEATURES = PATH_POINTS * 4  # each key point from the object: dx, dy, dz, fingers
-PATH_OUT = 4  # a foreseen key point: x, y, z (as positions enter the nets), fingers
-# The path's foresight reads the affordance, its type, the kind the gripper holds and the kind
-# a grasp there would close on (each one-hot with "none").
-FORESIGHT_FEATURES = ACTION_FEATURES + len(TYPES) + 2 * (1 + len(KINDS))
-PATH_LOSS_WEIGHT = 1.0
 PAIR = 4  # between two objects: dx, dy, dz, distance
 HEAD = 3 + 3 + 3 + 3  # moves, gone, held logits; change in position (cm); up; along
 CM = 100.0  # positions change in centimetres at the nets' outputs
@@ -60,12 +48,6 @@ class DynamicsConfig:
     hidden: int = 96
     rounds: int = 2  # message-passing rounds
     outcomes: int = 2  # K: where one start can go two ways
-    arm_path: bool = False  # the arm's key points as an input
-    # The affordance's point and every other object also seen in each object's own frame
-    # (`frame_coordinates`): whether a cup placed on a block tips it turns on where along the
-    # block the cup and the support are, a product of positions and axes that the first
-    # linear layer cannot form from the two apart.
-    frames: bool = False
     # training
     steps: int = 16000  # side-effect landings kept improving to here (docs/experiments)
     batch: int = 256
@@ -76,18 +58,23 @@ class DynamicsConfig:
     log_every: int = 50
     seed: int = 0
     threads: int = 2
-    input_noise: float = 0.0  # metres of Gaussian noise on input positions (robust to perception)
-    mirror: bool = False  # also learn each execution mirrored across the table's centre line
     spread: float = 0.05  # share of the loss every outcome takes, so none is left untrained
-    rare_weight: float = 1.0  # weight of an object that moves or leaves the table in the gate's loss
     moved: float = 0.002  # metres: an object that moved less than this counts as still
     turned_deg: float = 3.0  # ... and whose axes turned less than this
-    # The share of each batch drawn from executions started from the state the perception net
-    # sees (`afford train dynamics --perceived-data`), when there are any.
-    perceived_share: float = 0.25
     # The outcome head's logits are divided by this (objects/calibration.py: fitted on val
     # after training; 1: as trained).
     outcome_temperature: float = 1.0
+
+    # Fields that shipped files store but this code does not vary: each with the one value it
+    # runs (training/fields.from_dict refuses a stored config that asks for another).
+    removed: ClassVar[dict[str, object]] = {
+        "arm_path": False,
+        "frames": False,
+        "input_noise": 0.0,
+        "mirror": False,
+        "rare_weight": 1.0,
+        "perceived_share": 0.25,
+    }
 
 
 PRESETS = {
@@ -129,11 +116,10 @@ class TypeDynamics(nn.Module):
 
     def __init__(self, config: DynamicsConfig):
         super().__init__()
-        frame = FRAME if config.frames else 0
-        n_in = FEATURES + RELATIVE + frame + ACTION_FEATURES + (PATH_FEATURES if config.arm_path else 0)
+        n_in = FEATURES + RELATIVE + ACTION_FEATURES
         self.k = config.outcomes
         self.encode = _mlp(n_in, config.hidden, config.hidden)
-        self.rounds = nn.ModuleList(Relations(config.hidden, PAIR + frame) for _ in range(config.rounds))
+        self.rounds = nn.ModuleList(Relations(config.hidden, PAIR) for _ in range(config.rounds))
         self.head = _mlp(config.hidden, config.hidden, config.outcomes * HEAD)
         self.choose = _mlp(config.hidden, config.hidden, config.outcomes)
 
@@ -161,27 +147,14 @@ class ObjectDynamics(nn.Module):
         super().__init__()
         self.config = config
         self.p = nn.ModuleDict({t: TypeDynamics(config) for t in TYPES})
-        if config.arm_path:
-            self.foresee = _mlp(FORESIGHT_FEATURES, 2 * config.hidden, PATH_POINTS * PATH_OUT)
 
-    def outcomes(
-        self, before: np.ndarray, held: np.ndarray, actions: np.ndarray, paths: np.ndarray | None = None
-    ) -> Outcomes:
-        """`predict` with this net: what every world model's dynamics answer (`ensemble.py` too)."""
-        return predict(self, before, held, actions, paths)
+    def outcomes(self, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> Outcomes:
+        """`predict` with this net: what every world model's dynamics answer."""
+        return predict(self, before, held, actions)
 
     def forward(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         out: dict[str, torch.Tensor] = {}
         nodes = batch["nodes"]
-        if self.config.arm_path:
-            foreseen = self.foresee(batch["foresight"]).view(-1, PATH_POINTS, PATH_OUT)
-            # The recorded path where there is one (training), else the foresight (planning).
-            path = batch.get("path", foreseen)
-            seen_from = path[:, None, :, :3] - batch["pos"][:, :, None]  # (N, slots, points, 3)
-            fingers = path[:, None, :, 3:].expand(*seen_from.shape[:3], 1)
-            along_path = torch.cat([seen_from, fingers], -1).flatten(2) * batch["present"][..., None]
-            nodes = torch.cat([nodes, along_path], -1)
-            out["path"] = foreseen
         types = batch["type"]
         for index, name in enumerate(TYPES):
             rows = torch.nonzero(types == index).flatten()
@@ -196,27 +169,6 @@ class ObjectDynamics(nn.Module):
 
 
 # ---------------------------------------------------------------------------- inputs
-def mirror(before, after, actions, paths):
-    """An execution reflected across the table's centre line (x -> -x): the same physics, so a
-    second example of it. A reflection turns quaternion (w, x, y, z) into (w, x, -y, -z) and a
-    yaw a into 180 - a."""
-
-    def poses(p):
-        p = p.copy()
-        p[..., 0] = 2 * CENTRE[0] - p[..., 0]
-        p[..., 5:7] *= -1
-        return p
-
-    a = actions.copy()
-    a[:, Col.X] = 2 * CENTRE[0] - a[:, Col.X]
-    a[:, Col.ANGLE] = (180.0 - a[:, Col.ANGLE]) % 360.0
-    a[:, Col.TURN] = -a[:, Col.TURN]
-    q = paths.copy()
-    q[..., 0] = 2 * CENTRE[0] - q[..., 0]
-    q[..., 3] = (180.0 - q[..., 3]) % 360.0
-    return poses(before), poses(after), a, q
-
-
 def action_features(actions: np.ndarray) -> np.ndarray:
     """(N, 7) affordance rows -> (N, ACTION_FEATURES)."""
     angle = np.radians(actions[:, Col.ANGLE])
@@ -236,85 +188,23 @@ def action_features(actions: np.ndarray) -> np.ndarray:
     ).astype(np.float32)
 
 
-def frame_coordinates(offsets: np.ndarray, up: np.ndarray, along: np.ndarray) -> np.ndarray:
-    """(..., 3) offsets from objects -> the same in each object's frame (..., FRAME): along its
-    `along` axis (the block's length; its sign is the pose's, so only the signs of two points
-    seen from one object compare), across it, and up its `up` axis. Broadcasts the axes."""
-    across = np.cross(up, along)
-    return np.stack([(offsets * a).sum(-1) for a in (along, across, up)], -1)
-
-
-def encode_inputs(
-    before: np.ndarray,
-    held: np.ndarray,
-    actions: np.ndarray,
-    paths: np.ndarray | None,
-    config: DynamicsConfig,
-) -> dict[str, torch.Tensor]:
+def encode_inputs(before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> dict[str, torch.Tensor]:
     """The nets' inputs for N executions: poses (N, slots, 7), held slots (N,), affordance rows
-    (N, 7), arm key points (N, 32, 5) or None."""
+    (N, 7)."""
     nodes, present = slot_features(before, held)
     pos = np.where(present[..., None], np.nan_to_num(before[..., :3]), 0.0)
     rel = (pos - actions[:, None, Col.POSITION]) * POS_SCALE
     rel = np.concatenate([rel, np.linalg.norm(rel[..., :2], axis=-1, keepdims=True)], -1)
     act = np.broadcast_to(action_features(actions)[:, None], (len(actions), N_SLOTS, ACTION_FEATURES))
     parts = [nodes, rel * present[..., None], act]
-    if config.frames:
-        up, along = quat_axes(np.where(present[..., None], np.nan_to_num(before[..., 3:7]), [1.0, 0, 0, 0]))
-        # The affordance's point from each object, in the object's frame.
-        parts.insert(2, frame_coordinates(-rel[..., :3], up, along) * present[..., None])
-    extra = {}
-    if config.arm_path:
-        # The path's key points are placed, and the objects seen from them, inside the net
-        # (`ObjectDynamics.forward`), which may have to foresee the path first.
-        extra["pos"] = torch.from_numpy(((pos - CENTRE) * POS_SCALE).astype(np.float32))
-        extra["foresight"] = torch.from_numpy(foresight_inputs(before, held, actions))
-        if paths is not None:
-            if np.isnan(paths).any():
-                raise ValueError("arm paths with missing key points: this dataset recorded none")
-            extra["path"] = torch.from_numpy(path_targets(paths))
     delta = (pos[:, None, :, :] - pos[:, :, None, :]) * POS_SCALE  # j seen from i
     pair = np.concatenate([delta, np.linalg.norm(delta, axis=-1, keepdims=True)], -1)
-    if config.frames:  # j seen from i, in i's frame
-        pair = np.concatenate([pair, frame_coordinates(delta, up[:, :, None], along[:, :, None])], -1)
     return {
         "nodes": torch.from_numpy(np.concatenate(parts, -1).astype(np.float32)),
         "pair": torch.from_numpy(pair.astype(np.float32)),
         "present": torch.from_numpy(present),
         "type": torch.from_numpy(actions[:, Col.TYPE].astype(np.int64)),
-        **extra,
     }
-
-
-def path_targets(paths: np.ndarray) -> np.ndarray:
-    """(N, points, PATH_WIDTH) recorded key points -> (N, points, PATH_OUT) as the net foresees
-    them: positions as objects' positions enter the nets, and the fingers' opening."""
-    xyz = (paths[..., :3] - CENTRE) * POS_SCALE
-    return np.concatenate([xyz, paths[..., 4:5]], -1).astype(np.float32)
-
-
-def foresight_inputs(before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> np.ndarray:
-    """(N, FORESIGHT_FEATURES): what the arm's path follows from. Besides the affordance and its
-    type, the kind in the gripper (its fingers' opening while carrying, and how high above
-    the point a place lets go) and the kind a grasp would close on: the graspable object
-    nearest the point within `MOTION.grasp_radius` (`sim/arm.nearest_graspable`), which sets
-    how far the fingers close."""
-    n = len(actions)
-    kinds = np.append(SLOT_KIND, -1)  # index -1 (no slot) is "none"
-    held = np.asarray(held, dtype=np.int64)
-    held_kind = kinds[np.where(held >= 0, held, N_SLOTS)]
-    present = ~np.isnan(before[..., 0])
-    graspable = np.isin(SLOT_KIND, [KINDS.index(k) for k in GRASPABLE])[None] & present
-    graspable &= np.arange(N_SLOTS)[None] != held[:, None]
-    d = np.linalg.norm(np.nan_to_num(before[..., :3]) - actions[:, None, Col.POSITION], axis=-1)
-    d = np.where(graspable, d, np.inf)
-    nearest = d.argmin(1)
-    under = np.where(d[np.arange(n), nearest] <= MOTION.grasp_radius, SLOT_KIND[nearest], -1)
-    one_hot = lambda k: np.eye(1 + len(KINDS))[k + 1]  # noqa: E731
-    types = np.eye(len(TYPES))[actions[:, Col.TYPE].astype(int)]
-    return np.concatenate([action_features(actions), types, one_hot(held_kind), one_hot(under)], 1).astype(
-        np.float32
-    )
 
 
 def encode_targets(
@@ -348,21 +238,17 @@ def encode_targets(
 
 
 # ---------------------------------------------------------------------------- loss
-def outcome_losses(
-    out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], rare_weight: float = 1.0
-) -> torch.Tensor:
+def outcome_losses(out: dict[str, torch.Tensor], target: dict[str, torch.Tensor]) -> torch.Tensor:
     """(B, K) each outcome's loss on each execution: the gate, gone and held as classifications
-    over the objects on the table (an object that moves or leaves the table weighs
-    `rare_weight`: most objects stay), and where each object that moves lands."""
+    over the objects on the table, and where each object that moves lands."""
     was = target["was"][..., None]
 
-    def bce(logit: torch.Tensor, y: torch.Tensor, weight: float = 1.0) -> torch.Tensor:
-        y = y[..., None].expand_as(logit)
-        return F.binary_cross_entropy_with_logits(logit, y, reduction="none") * (1 + (weight - 1) * y)
+    def bce(logit: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
+        return F.binary_cross_entropy_with_logits(logit, y[..., None].expand_as(logit), reduction="none")
 
     cls = (
-        bce(out["moves"], target["moves"], rare_weight)
-        + bce(out["gone"], target["gone"], rare_weight)
+        bce(out["moves"], target["moves"])
+        + bce(out["gone"], target["gone"])
         + bce(out["held"], target["held"])
     ) * was
     lands = target["lands"][..., None]
@@ -379,20 +265,16 @@ def outcome_losses(
 
 
 def mixture_loss(
-    out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], spread: float, rare_weight: float = 1.0
+    out: dict[str, torch.Tensor], target: dict[str, torch.Tensor], spread: float
 ) -> tuple[torch.Tensor, dict]:
     """Winner takes all over the K outcomes (each execution trains the outcome nearest to what
     happened, plus a small share to every outcome), and the outcome head learns which wins."""
-    per = outcome_losses(out, target, rare_weight)
+    per = outcome_losses(out, target)
     best = per.detach().argmin(1)
     wta = per.gather(1, best[:, None]).squeeze(1)
     choice = F.cross_entropy(out["outcome"], best)
     loss = ((1 - spread) * wta + spread * per.mean(1)).mean() + choice
     parts = {"wta": float(wta.detach().mean()), "choice": float(choice.detach())}
-    if "path" in out and "path" in target:  # the arm's foresight, learned beside the dynamics
-        path = F.smooth_l1_loss(out["path"], target["path"], beta=0.05)
-        loss = loss + PATH_LOSS_WEIGHT * path
-        parts["path"] = float(path.detach())
     return loss, parts
 
 
@@ -413,17 +295,10 @@ class Outcomes:
 
 
 @torch.no_grad()
-def predict(
-    net: ObjectDynamics,
-    before: np.ndarray,
-    held: np.ndarray,
-    actions: np.ndarray,
-    paths: np.ndarray | None = None,
-) -> Outcomes:
-    """Every outcome of N executions from their start states (eq. 2 on objects); a net that
-    takes the arm's path uses `paths` if given, else its own foresight of them."""
+def predict(net: ObjectDynamics, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> Outcomes:
+    """Every outcome of N executions from their start states (eq. 2 on objects)."""
     net.eval()
-    out = net(encode_inputs(before, held, actions, paths, net.config))
+    out = net(encode_inputs(before, held, actions))
     moves = torch.sigmoid(out["moves"]).numpy() > 0.5  # (N, S, K)
     gone = torch.sigmoid(out["gone"]).numpy() > 0.5
     held_p = torch.sigmoid(out["held"]).numpy()

@@ -17,7 +17,6 @@ import numpy as np
 
 from afford.data.effects import KINDS as EFFECT_KINDS
 from afford.objects.dynamics import ObjectDynamics, Outcomes
-from afford.objects.ensemble import Dynamics, DynamicsEnsemble
 from afford.objects.transitions import Transitions
 from afford.sim.affordances import TYPES
 from afford.sim.camera import world_to_pixel
@@ -54,19 +53,8 @@ def pixel_error(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
     return np.where(gone, MISSING_PX, d)
 
 
-# A world model's dynamics: (start poses, held slots, affordance rows, arm paths) -> Outcomes.
-Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], Outcomes]
-
-
-def net_predictor(net: Dynamics, recorded_paths: bool = False) -> Predictor:
-    """A dynamics net (or an ensemble of them) as a world model's dynamics. One that takes the
-    arm's path foresees it, as in planning, unless `recorded_paths` (a diagnostic: what a
-    perfect foresight gives); a net that takes no path ignores it."""
-
-    def run(before, held, actions, paths):
-        return net.outcomes(before, held, actions, paths if recorded_paths else None)
-
-    return run
+# A world model's dynamics: (start poses, held slots, affordance rows) -> Outcomes.
+Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray], Outcomes]
 
 
 def simulator_predictor() -> Predictor:
@@ -75,7 +63,7 @@ def simulator_predictor() -> Predictor:
     from afford.sim.scene import Scene
 
     scene = Scene()
-    return lambda before, held, actions, paths: simulate(scene, before, held, actions)
+    return lambda before, held, actions: simulate(scene, before, held, actions)
 
 
 def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None = None) -> Outcomes:
@@ -86,7 +74,6 @@ def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None 
             start[i : i + CHUNK],
             t.held_before[i : i + CHUNK],
             t.actions[i : i + CHUNK],
-            t.paths[i : i + CHUNK],
         )
         for i in range(0, len(t), CHUNK)
     ]
@@ -95,10 +82,10 @@ def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None 
     )
 
 
-def measure(predictor: Predictor | Dynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
+def measure(predictor: Predictor | ObjectDynamics, t: Transitions, before: np.ndarray | None = None) -> dict:
     """The dynamics report on the executions `t` (see the module's docstring)."""
-    if isinstance(predictor, ObjectDynamics | DynamicsEnsemble):
-        predictor = net_predictor(predictor)
+    if isinstance(predictor, ObjectDynamics):
+        predictor = predictor.outcomes
     outcomes = predict_all(predictor, t, before)
     likely, _ = outcomes.likeliest()
     effects = t.effects()

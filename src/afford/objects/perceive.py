@@ -29,7 +29,6 @@ from afford.sim.camera import FOCAL_PX, SIZE
 from afford.sim.constants import CAMERA
 
 HEAT_CUT = 0.3  # a centre map's peak at least this high is an object
-HIDDEN_CUT = 0.3  # ... and on the hidden heads' maps (PerceptionConfig.hidden)
 ASSIGN_PX = 6.0  # a pixel whose vote lands farther than this from every centre joins none
 MIN_PIXELS = 3  # fewer pixels than this: noise, not an object
 BATCH = 64
@@ -47,7 +46,6 @@ class SeenObject:
     mask: np.ndarray  # (H, W) bool: the pixels it was seen in
     held: float  # probability that the gripper holds it
     score: float  # its centre map's peak
-    hidden: bool = False  # no pixel shows it: where it is was inferred (PerceptionConfig.hidden)
 
     @property
     def posture(self) -> str:
@@ -84,13 +82,7 @@ def perceive(net: PerceptionNet, images: np.ndarray) -> list[list[SeenObject]]:
         kinds = out[:, CHANNELS["seg"]].argmax(1).numpy()
         # (B, H, W, C): an object's pixels' outputs are rows gathered in one step.
         pixels = out.permute(0, 2, 3, 1).numpy()
-        if net.config.hidden:
-            hidden, hidden_scores = centre_peaks(out[:, CHANNELS["hidden"]], HIDDEN_CUT)
-        for j in range(len(x)):
-            objects = _objects(pixels[j], kinds[j], peaks[j], scores[j])
-            if net.config.hidden:
-                objects += _hidden_objects(pixels[j], hidden[j], hidden_scores[j], objects)
-            found.append(objects)
+        found += [_objects(pixels[j], kinds[j], peaks[j], scores[j]) for j in range(len(x))]
     return found
 
 
@@ -167,29 +159,6 @@ def _objects(
     return objects
 
 
-def _hidden_objects(
-    pixels: np.ndarray, peaks: np.ndarray, scores: np.ndarray, seen: list[SeenObject]
-) -> list[SeenObject]:
-    """One image's objects that no pixel shows, from the hidden heads' peaks (kind, row,
-    column) and the heads' outputs at them; a peak beside an object of its kind that is seen
-    is that object, not another."""
-    objects = []
-    for (k, row, col), score in zip(peaks, scores, strict=True):
-        kind = KINDS[k]
-        pixel = np.array([col + 0.5, row + 0.5])
-        if any(o.kind == kind and np.linalg.norm(o.pixel - pixel) <= ASSIGN_PX for o in seen):
-            continue
-        out = pixels[row, col]
-        up = out[CHANNELS["hidden_up"]]
-        up = up / max(np.linalg.norm(up), 1e-9)
-        z = float(out[CHANNELS["hidden_z"]][0]) / POS_SCALE
-        along = _principal(out[CHANNELS["hidden_along"]])
-        where = pixel_world(pixel, z)
-        no_pixels = np.zeros(pixels.shape[:2], bool)
-        objects.append(SeenObject(kind, pixel, where, up, along, no_pixels, 0.0, float(score), hidden=True))
-    return objects
-
-
 def _principal(products: np.ndarray) -> np.ndarray:
     """The long axis from the six entries of its outer product with itself (AXIS_PAIRS)."""
     product = np.zeros((3, 3))
@@ -204,8 +173,7 @@ def by_slot(objects: list[SeenObject]) -> list[SeenObject | None]:
     which goes where is free."""
     slots: list[SeenObject | None] = [None] * N_SLOTS
     for k, kind in enumerate(KINDS):
-        # seen objects first: a guess at a hidden one never takes the slot of one that shows
-        mine = sorted((o for o in objects if o.kind == kind), key=lambda o: (o.hidden, -o.score))
+        mine = sorted((o for o in objects if o.kind == kind), key=lambda o: -o.score)
         for slot, o in zip(np.flatnonzero(SLOT_KIND == k), mine, strict=False):
             slots[slot] = o
     return slots

@@ -14,19 +14,13 @@ stride-4 layer suffices for affordances. Per pixel the heads give
 - `posture`: upright, tipped or lying, as a class. One object in thirty lies on its side, and
   a regressed up axis averaged those few into upright; a class scored with weights for the
   rare postures is not averaged away, and decoding makes the up axis agree with it.
-With `hidden`, the net also says where objects are that no pixel shows (in the generated
-scenes, three supports in ten lie wholly under the block): a centre map per kind of them, and
-their height and axes at their centres, learned from the simulator's poses of those objects.
-These heads read the decoder's features, not the thin full-resolution layer (an object no
-pixel shows has no edge to place), and start at zero, so the heads the net had keep theirs.
-Where under the block a support lies, one image does not always tell; the net learns where
-the data put them.
 Decoding the heads into objects is `perceive.py`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import torch
@@ -46,13 +40,7 @@ HEADS = {
     "along": 6,
     "held": 1,
     "posture": len(POSTURES),
-    # objects no pixel shows (PerceptionConfig.hidden)
-    "hidden": len(KINDS),
-    "hidden_z": 1,
-    "hidden_up": 3,
-    "hidden_along": 6,
 }
-HIDDEN_HEADS = ("hidden", "hidden_z", "hidden_up", "hidden_along")
 # Each head's channels in the net's stacked output.
 CHANNELS = {
     name: slice(sum(list(HEADS.values())[:i]), sum(list(HEADS.values())[: i + 1]))
@@ -66,7 +54,6 @@ AXIS_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))  # the along produ
 # (non-ball objects: 90% upright, 6% tipped, 3.4% lying).
 POSTURE_WEIGHT = torch.tensor([1.0, 4.0, 5.0])
 NO_POSTURE = -100  # cross-entropy's ignore index: background, and balls (a sphere has no posture)
-HIDDEN_POSE_NEAR = 0.3  # a hidden object's pose is learned where its centre map is above this
 
 
 @dataclass
@@ -74,16 +61,6 @@ class PerceptionConfig:
     width: int = 16  # channels at half resolution; each further stride 2 doubles them
     depth: int = 1  # bottlenecks per CSP stage
     sigma_px: float = 1.5
-    # The weight of a pixel on an object's outline (either side of it) in the kind and offset
-    # losses, against 1 elsewhere: the masks lose most of their missed pixels there
-    # (docs/experiments/objects-perception.md). 1 is the shipped net's.
-    edge_weight: float = 1.0
-    # Also the objects that no pixel shows (HIDDEN_HEADS); False is the shipped net's.
-    hidden: bool = False
-    # Whether the hidden heads' losses also train the features they read. False stops their
-    # gradient at the heads, so it does not shape the features the other heads use; the clipping
-    # of the gradient's norm and the best checkpoint's validation loss still count them.
-    hidden_trains_trunk: bool = True
     # training
     steps: int = 8000
     batch: int = 16
@@ -96,16 +73,15 @@ class PerceptionConfig:
     seed: int = 0
     threads: int = 2
 
+    # Fields that shipped files may store but this code does not vary: each with the one value
+    # it runs (training/fields.from_dict refuses a stored config that asks for another).
+    removed: ClassVar[dict[str, object]] = {"edge_weight": 1.0, "hidden": False, "hidden_trains_trunk": True}
+
 
 PRESETS = {
     "cpu": PerceptionConfig(),
     "tiny": PerceptionConfig(width=4, steps=30, batch=4, eval_every=15, log_every=5),
 }
-
-
-def heads_of(config: PerceptionConfig) -> dict[str, int]:
-    """The heads a net of this config has, in output order; channels as in CHANNELS."""
-    return {k: n for k, n in HEADS.items() if config.hidden or k not in HIDDEN_HEADS}
 
 
 class ConvBNReLU(nn.Sequential):
@@ -171,33 +147,16 @@ class PerceptionNet(nn.Module):
         # The work is done at half resolution; one thin layer at full resolution, with the image
         # itself beside the features, puts masks' edges and centres on the right pixel.
         self.refine = ConvBNReLU(w + 6, w // 2, 3)
-        self.heads = heads_of(config)
-        seen = sum(n for k, n in self.heads.items() if k not in HIDDEN_HEADS)
-        self.head = nn.Conv2d(w // 2, seen, 1)
+        self.head = nn.Conv2d(w // 2, sum(HEADS.values()), 1)
         with torch.no_grad():  # centre maps start near 0, as they mostly are (CenterNet's prior)
             self.head.bias[CHANNELS["heat"]] = -4.0
-        self.hidden_head = None
-        if config.hidden:
-            self.hidden_head = nn.Conv2d(w, sum(HEADS[k] for k in HIDDEN_HEADS), 1)
-            with torch.no_grad():
-                self.hidden_head.weight.zero_()
-                self.hidden_head.bias.zero_()
-                self.hidden_head.bias[: HEADS["hidden"]] = -4.0
         ys, xs = torch.meshgrid(torch.linspace(-1, 1, SIZE), torch.linspace(-1, 1, SIZE), indexing="ij")
         self.register_buffer("coords", torch.stack([xs, ys])[None], persistent=False)
 
     def forward(self, images: torch.Tensor) -> dict[str, torch.Tensor]:
         """(B, 4, H, W) RGBD in [0, 1] -> each head's (B, C, H, W) output (raw logits)."""
-        split = torch.split(self.stacked(images), list(self.heads.values()), dim=1)
-        return dict(zip(self.heads, split, strict=True))
-
-    def adapt_state(self, state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
-        """Weights of a net without the hidden heads, for one with them (fine-tuning): the
-        new heads start as this net's do."""
-        for key, value in self.state_dict().items():
-            if key.startswith("hidden_head.") and key not in state:
-                state[key] = value
-        return state
+        split = torch.split(self.stacked(images), list(HEADS.values()), dim=1)
+        return dict(zip(HEADS, split, strict=True))
 
     def stacked(self, images: torch.Tensor) -> torch.Tensor:
         """The heads' outputs in one (B, C, H, W) tensor, channels as in CHANNELS."""
@@ -212,10 +171,7 @@ class PerceptionNet(nn.Module):
             x = F.interpolate(x, scale_factor=2, mode="nearest")
             x = u(torch.cat([x, skips.pop()], 1))
         x = F.interpolate(x, scale_factor=2, mode="bilinear", align_corners=False)
-        out = self.head(self.refine(torch.cat([x, full], 1)))
-        if self.hidden_head is None:
-            return out
-        return torch.cat([out, self.hidden_head(x if self.config.hidden_trains_trunk else x.detach())], 1)
+        return self.head(self.refine(torch.cat([x, full], 1)))
 
 
 # ---------------------------------------------------------------------------- targets
@@ -235,23 +191,6 @@ def targets(
     along = np.zeros((b, 6, SIZE, SIZE), np.float32)
     is_held = np.zeros((b, 1, SIZE, SIZE), np.float32)
     stance = np.full((b, SIZE, SIZE), NO_POSTURE, np.int64)
-    edge = outlines(masks)
-    hidden = np.zeros((b, len(KINDS), SIZE, SIZE), np.float32)
-    hidden_pose = np.zeros((b, 10, SIZE, SIZE), np.float32)  # z, up, along's products
-    hidden_at = np.zeros((b, SIZE, SIZE), np.float32)  # where the pose is learned
-    for i in range(b):
-        shown = np.unique(masks[i])
-        for slot in range(poses.shape[1]):
-            if np.isnan(poses[i, slot, 0]) or slot in shown or slot == held[i]:
-                continue
-            centre = world_to_pixel(poses[i, slot, :3].astype(float))
-            near = _mark_centre(hidden[i, SLOT_KIND[slot]], centre, px, sigma_px)
-            u, a = quat_axes(poses[i, slot, 3:7].astype(float))
-            pose = np.concatenate([[poses[i, slot, 2] * POS_SCALE], u, [a[p] * a[q] for p, q in AXIS_PAIRS]])
-            # Its pose is read at its centre's pixel; the pixels around it learn it too.
-            at = near > HIDDEN_POSE_NEAR
-            hidden_pose[i][:, at] = pose[:, None]
-            hidden_at[i][at] = 1.0
     for i in range(b):
         for slot in np.unique(masks[i]):
             if slot < 0 or np.isnan(poses[i, slot, 0]):
@@ -279,10 +218,6 @@ def targets(
         "along": t(along),
         "held": t(is_held),
         "posture": t(stance),
-        "edge": t(edge),
-        "hidden": t(hidden),
-        "hidden_pose": t(hidden_pose),
-        "hidden_at": t(hidden_at),
     }
 
 
@@ -297,19 +232,6 @@ def _mark_centre(heat: np.ndarray, centre: np.ndarray, px: np.ndarray, sigma_px:
     return near
 
 
-def outlines(masks: np.ndarray) -> np.ndarray:
-    """(B, H, W) 1.0 where a pixel's 4-neighbourhood holds another instance (or the background,
-    for an object's pixel, and an object, for a background pixel), else 0.0."""
-    edge = np.zeros(masks.shape, bool)
-    across = masks[:, 1:, :] != masks[:, :-1, :]
-    edge[:, 1:, :] |= across
-    edge[:, :-1, :] |= across
-    across = masks[:, :, 1:] != masks[:, :, :-1]
-    edge[:, :, 1:] |= across
-    edge[:, :, :-1] |= across
-    return edge.astype(np.float32)
-
-
 def focal_heat(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     """CenterNet's penalty-reduced focal loss on Gaussian centre maps, per centre."""
     p = torch.sigmoid(logits).clamp(1e-4, 1 - 1e-4)
@@ -319,24 +241,20 @@ def focal_heat(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return (pos.sum() + neg.sum()) / peak.sum().clamp(min=1)
 
 
-def loss(
-    out: dict[str, torch.Tensor], t: dict[str, torch.Tensor], edge_weight: float = 1.0
-) -> tuple[torch.Tensor, dict[str, float]]:
-    at = 1 + (edge_weight - 1) * t["edge"]  # each pixel's weight in the kind and offset losses
+def loss(out: dict[str, torch.Tensor], t: dict[str, torch.Tensor]) -> tuple[torch.Tensor, dict[str, float]]:
     obj = (t["seg"] > 0).float()[:, None]
     n = obj.sum().clamp(min=1)
     seg_weight = SEG_WEIGHT.to(out["seg"])
     kind = F.cross_entropy(out["seg"], t["seg"], weight=seg_weight, reduction="none")
-    offset = F.smooth_l1_loss(out["offset"], t["offset"], reduction="none", beta=0.05) * obj * at[:, None]
+    offset = F.smooth_l1_loss(out["offset"], t["offset"], reduction="none", beta=0.05) * obj
     weights = POSTURE_WEIGHT.to(out["posture"])
     # A ball's up axis still counts (it is drawn with it), at the weight of upright.
     rare = torch.where(t["posture"] >= 0, weights[t["posture"].clamp(min=0)], 1.0)[:, None] * obj
     parts = {
         # Objects cover a tenth of the image: their pixels weigh more, or the table wins.
-        # With every pixel at weight 1, cross-entropy's own weighted mean.
-        "seg": (kind * at).sum() / (seg_weight[t["seg"]] * at).sum(),
+        "seg": kind.sum() / seg_weight[t["seg"]].sum(),
         "heat": focal_heat(out["heat"], t["heat"]),
-        "offset": offset.sum() / (obj * at[:, None]).sum().clamp(min=1),
+        "offset": offset.sum() / obj.sum().clamp(min=1),
         "z": (F.smooth_l1_loss(out["z"], t["z"], reduction="none", beta=0.05) * obj).sum() / n,
         "up": ((out["up"] - t["up"]) ** 2 * rare).sum() / rare.sum().clamp(min=1),
         "along": ((out["along"] - t["along"]) ** 2 * obj).sum() / n,
@@ -356,12 +274,4 @@ def loss(
         + parts["held"]
         + parts["posture"]
     )
-    if "hidden" in out:
-        at = t["hidden_at"][:, None]
-        pose = torch.cat([out["hidden_z"], out["hidden_up"], out["hidden_along"]], 1)
-        err = F.smooth_l1_loss(pose, t["hidden_pose"], reduction="none", beta=0.05)
-        err = torch.cat([10 * err[:, :1], err[:, 1:]], 1)  # the height weighs as `z` does
-        parts["hidden"] = focal_heat(out["hidden"], t["hidden"])
-        parts["hidden_pose"] = (err * at).sum() / at.sum().clamp(min=1)
-        total = total + parts["hidden"] + parts["hidden_pose"]
     return total, {k: float(v.detach()) for k, v in parts.items()}

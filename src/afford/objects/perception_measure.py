@@ -3,9 +3,7 @@
 An object is visible when at least `VISIBLE_PX` pixels of the image show it (a ball inside a
 cup is not). Perceived and visible objects are matched greedily, nearest first, within
 `MATCH_PX` of the true centre's projection, whatever their kinds; then the measures are read
-off the matched pairs. A net with the hidden heads also names objects no pixel shows; those
-are matched the same way, apart, to the true objects no pixel shows (and not held), as the
-heads learn them. An object that shows 1 to `VISIBLE_PX` - 1 pixels is in neither count.
+off the matched pairs. An object that shows 1 to `VISIBLE_PX` - 1 pixels is in neither count.
 """
 
 from __future__ import annotations
@@ -29,16 +27,7 @@ SPEED_BATCH = 256
 def match(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray) -> dict[int, int]:
     """{true slot: index in objects} for the visible slots matched, nearest pairs first."""
     visible = [s for s in range(N_SLOTS) if not np.isnan(poses[s, 0]) and (mask == s).sum() >= VISIBLE_PX]
-    return _nearest(objects, [j for j, o in enumerate(objects) if not o.hidden], poses, visible)
-
-
-def match_hidden(
-    objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray, held: int
-) -> tuple[dict[int, int], list[int]]:
-    """The objects said to be hidden matched to the true ones no pixel shows: {true slot: index
-    in objects}, and those slots."""
-    unseen = [s for s in range(N_SLOTS) if not np.isnan(poses[s, 0]) and s != held and not (mask == s).any()]
-    return _nearest(objects, [j for j, o in enumerate(objects) if o.hidden], poses, unseen), unseen
+    return _nearest(objects, list(range(len(objects))), poses, visible)
 
 
 def _nearest(
@@ -60,14 +49,12 @@ def _nearest(
     return pairs
 
 
-def aligned_state(
-    objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray, true_held: int
-) -> tuple[np.ndarray, int]:
+def aligned_state(objects: list[SeenObject], poses: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, int]:
     """Perceived objects as a state whose slots are those of the true objects they match: the
     dynamics measured from perceived states are scored object by object against the truth."""
     out = np.full((N_SLOTS, 7), np.nan, np.float32)
     held, best = -1, 0.5
-    pairs = match(objects, poses, mask) | match_hidden(objects, poses, mask, true_held)[0]
+    pairs = match(objects, poses, mask)
     for slot, j in pairs.items():
         out[slot] = np.concatenate([objects[j].position, objects[j].quat])
         if objects[j].held > best:
@@ -93,7 +80,7 @@ def perceived_starts(net: PerceptionNet, data: Dataset, t) -> tuple[np.ndarray, 
                 raise DataError(
                     f"{data.root}: no instance masks, needed to match perceived objects to true ones"
                 )
-            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k], int(s.held[k]))
+            before[r], held[r] = aligned_state(objects, s.poses[k], s.masks[k])
     return before, held
 
 
@@ -108,8 +95,6 @@ def measure_perception(
     # Per true posture and per kind: where the shares above are lost.
     by_posture = {name: [0, 0] for name in ("upright", "tipped", "lying")}
     by_kind = {kind: [0, 0] for kind in KINDS}
-    hidden_n = hidden_found = hidden_said = 0
-    hidden_mm: list[float] = []
     seconds = 0.0
     for start in range(0, len(items), SPEED_BATCH):
         chunk = items[start : start + SPEED_BATCH]
@@ -127,14 +112,7 @@ def measure_perception(
                 by_kind[KINDS[SLOT_KIND[k]]][0] += 1
                 by_kind[KINDS[SLOT_KIND[k]]][1] += k in pairs
             found += len(pairs)
-            spurious += sum(not o.hidden for o in objects) - len(pairs)
-            inferred, unseen = match_hidden(objects, poses, mask, int(s.held[t]))
-            hidden_n += len(unseen)
-            hidden_found += len(inferred)
-            hidden_said += sum(o.hidden for o in objects)
-            hidden_mm += [
-                float(np.linalg.norm(objects[j].position - poses[k, :3])) * 1000 for k, j in inferred.items()
-            ]
+            spurious += len(objects) - len(pairs)
             held_seen = -1
             for slot, j in pairs.items():
                 o = objects[j]
@@ -177,13 +155,6 @@ def measure_perception(
         "mask_iou_mean": float(np.mean(ious)) if ious else None,
         "held_right": held_right / max(len(items), 1),
         "images_per_second": len(items) / seconds if seconds else None,
-        # objects no pixel shows (not held), and what the hidden heads make of them
-        "hidden_objects": hidden_n,
-        "hidden_found": hidden_found / max(hidden_n, 1) if net.config.hidden else None,
-        "hidden_position_median_mm": float(np.median(hidden_mm)) if hidden_mm else None,
-        "hidden_spurious_per_image": (hidden_said - hidden_found) / max(len(items), 1)
-        if net.config.hidden
-        else None,
     }
 
 
@@ -209,9 +180,5 @@ def perception_table(r: dict) -> str:
         ("mask IoU (mean)", f("mask_iou_mean", 4)),
         ("held object right", f("held_right", 4)),
         ("images / s (batches of 256)", f("images_per_second", 0)),
-        (f"objects no pixel shows (n {r['hidden_objects']})", ""),
-        ("  found by the hidden heads", f("hidden_found", 4)),
-        ("  position median (mm, 3D)", f("hidden_position_median_mm", 1)),
-        ("  spurious hidden per image", f("hidden_spurious_per_image", 3)),
     ]
     return "\n".join(f"{k:32s} {v}" for k, v in rows)

@@ -66,10 +66,10 @@ def train(
 
     def train_step(batch):
         images, t = batch
-        return loss(net(images), t, config.edge_weight)
+        return loss(net(images), t)
 
     def validate() -> dict[str, float]:
-        total, parts = loss(net(val_batch[0]), val_batch[1], config.edge_weight)
+        total, parts = loss(net(val_batch[0]), val_batch[1])
         return {"loss": float(total), **parts}
 
     loop = Loop(

@@ -19,7 +19,7 @@ KIND_COLOUR = {
 
 def perceived(image: np.ndarray, objects: list[SeenObject]) -> Image.Image:
     """The image with each perceived object's mask outline, centre, kind and posture; a held
-    object's label says so, and an object no pixel shows (the hidden heads') is a ring."""
+    object's label says so."""
     pil = to_pil(image)
     d = ImageDraw.Draw(pil)
     for o in objects:
@@ -30,12 +30,9 @@ def perceived(image: np.ndarray, objects: list[SeenObject]) -> Image.Image:
         for r, c in np.argwhere(edge):
             d.rectangle([c * SCALE, r * SCALE, c * SCALE + SCALE - 1, r * SCALE + SCALE - 1], outline=colour)
         x, y = o.pixel * SCALE
-        if o.hidden:
-            d.ellipse([x - 6, y - 6, x + 6, y + 6], outline=colour, width=2)
-        else:
-            d.ellipse([x - 4, y - 4, x + 4, y + 4], fill=colour, outline=(0, 0, 0))
+        d.ellipse([x - 4, y - 4, x + 4, y + 4], fill=colour, outline=(0, 0, 0))
         label = o.kind if o.kind == "ball" else f"{o.kind} {o.posture}"
-        label += " held" if o.held > 0.5 else " hidden" if o.hidden else ""
+        label += " held" if o.held > 0.5 else ""
         d.text((x + 6, y - 6), label, fill=(255, 255, 255))
     return pil
 

@@ -14,14 +14,14 @@ import torch
 
 from afford.images import to_chw, to_hwc
 from afford.objects.draw import Drawer
-from afford.objects.ensemble import Dynamics
+from afford.objects.dynamics import ObjectDynamics
 from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
 from afford.objects.state import moved
 
 
 class ObjectRollout:
-    def __init__(self, perception: PerceptionNet, dynamics: Dynamics, drawer: Drawer | None = None):
+    def __init__(self, perception: PerceptionNet, dynamics: ObjectDynamics, drawer: Drawer | None = None):
         self.perception, self.dynamics = perception, dynamics
         self.drawer = drawer if drawer is not None else Drawer()
 

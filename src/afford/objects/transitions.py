@@ -1,5 +1,5 @@
-"""Every execution of a dataset as a transition: the objects before, the affordance, the arm's
-path, the objects after. Read from the shards' small arrays, never their images, so a dataset
+"""Every execution of a dataset as a transition: the objects before, the affordance, the
+objects after. Read from the shards' small arrays, never their images, so a dataset
 made with `afford generate --poses-only` serves as well as one with images."""
 
 from __future__ import annotations
@@ -13,21 +13,18 @@ from afford.data.effects import StepEffects, step_effects
 from afford.data.format import DataError, Dataset, shard_path, shard_summary
 from afford.objects.state import SLOTS
 from afford.sim.affordance import AFF_WIDTH
-from afford.sim.arm_path import PATH_POINTS, PATH_WIDTH
 
 
 @dataclass
 class Transitions:
     """N executions: poses (N, slots, 7) before and after, held slots before and after (-1:
-    none), the executed affordance rows (N, 7), the arm's key points (N, 32, 5; NaN where the
-    dataset has none), and which sequence and step each came from."""
+    none), the executed affordance rows (N, 7), and which sequence and step each came from."""
 
     before: np.ndarray
     after: np.ndarray
     held_before: np.ndarray
     held_after: np.ndarray
     actions: np.ndarray
-    paths: np.ndarray
     sequence: np.ndarray
     step: np.ndarray  # which execution of its sequence (its start is state `step`)
 
@@ -82,12 +79,6 @@ def read_transitions(root: str | Path, split: str | None = None, limit: int | No
                 parts["held_before"].append(held[:-1])
                 parts["held_after"].append(held[1:])
                 parts["actions"].append(z["actions"][e0 : e0 + n - 1])
-                path = z.get("arm_path")
-                parts["paths"].append(
-                    path[e0 : e0 + n - 1]
-                    if path is not None
-                    else np.full((n - 1, PATH_POINTS, PATH_WIDTH), np.nan, np.float32)
-                )
                 parts["sequence"].append(np.full(n - 1, index))
                 parts["step"].append(np.arange(n - 1))
             s0 += n
@@ -98,7 +89,6 @@ def read_transitions(root: str | Path, split: str | None = None, limit: int | No
             np.zeros(0, np.int8),
             np.zeros(0, np.int8),
             np.zeros((0, AFF_WIDTH), np.float32),
-            np.zeros((0, PATH_POINTS, PATH_WIDTH), np.float32),
             np.zeros(0, np.int64),
             np.zeros(0, np.int64),
         )

@@ -21,8 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from afford.objects.draw import Drawer
-from afford.objects.dynamics import Outcomes
-from afford.objects.ensemble import Dynamics
+from afford.objects.dynamics import ObjectDynamics, Outcomes
 from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
 from afford.objects.state import moved
@@ -69,7 +68,7 @@ class ObjectsModel(WorldModel):
         image: np.ndarray,
         recognizer: Recognizer,
         perception: PerceptionNet,
-        dynamics: Dynamics,
+        dynamics: ObjectDynamics,
         drawer: Drawer | None = None,
         start: TrueStart | None = None,
     ):
@@ -135,7 +134,7 @@ class ObjectsBranchingModel(ObjectsModel):
         image: np.ndarray,
         recognizer: Recognizer,
         perception: PerceptionNet,
-        dynamics: Dynamics,
+        dynamics: ObjectDynamics,
         drawer: Drawer | None = None,
         risk: float = 0.0,
         start: TrueStart | None = None,

@@ -26,13 +26,28 @@ from lark.visitors import CollapseAmbiguities
 from afford.words.parses import Build, Item
 
 GRAMMAR = r"""
-start: _item (_join _item)*
-_join: "and" | "," | "," "and" | "then" | "and" "then" | "," "then" | "," "and" "then" | "but"
+start: _item (_join _later)*
+_join: "and" | "," | "," "and" | _then | "and" _then | "," _then | "," "and" _then | "but" | "," "but"
+_then: "then" | "after" "that" | "afterwards" | "next" | "finally" | "and" "finally"
+_later: _item | ditto
+ditto: dnp ("and" dnp)? _after?
+dnp: _the _mods noun                -> one
+    | _the _mods nouns               -> every
+    | _both _mods nouns              -> both
+    | "the" "other" _mods noun       -> other_one
+    | "the" "other" "one"            -> other_one
+    | "it"                           -> it
 
-_item: state _after? | command | _lead state _after?
-_after: "any" "more" | "anymore" | "afterwards" | "in" "the" "end" | "at" "the" "end" | "again"
+_item: state _after? | command | _lead state _after? | purpose
+purpose: command _so_that state _after?
+_so_that: "so" | "so" "that" | "," "so" | "," "so" "that" | "such" "that" | "in" "order" "that"
+        | "until"
+_after: "any" "more" | "anymore" | "any" "longer" | "afterwards" | "in" "the" "end" | "at" "the" "end"
+      | "again"
 _lead: "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "that" | "see" "that"
      | "i" "want" | "i" "want" "that" | "i" "would" "like" | "i" "need" | "i" "expect"
+     | "the" "goal" "is" | "the" "goal" "is" "that" | "make" "it" "so" "that" | "i" "would" "like" "it" "if"
+     | "i" "want" "to" "see" | "i" "would" "like" "to" "see" | "let" "'s" "make" "sure"
 
 // ------------------------------------------------------------------ states
 state: nps _preds                    -> says
@@ -61,7 +76,11 @@ _and: "and" | "," | "," "and" | "but"
 vp: head complements
   | _stand                           -> stands
   | _modal _stand_base               -> stands
+  | _modal vstate                    -> vp_do
+  | _modal "not" vstate              -> vp_dont
+  | _do "not" vstate                 -> vp_dont
 head: _pos                           -> yes
+    | _modal "no" "longer" _be_base  -> nolonger
     | _stand                         -> stand
     | _modal _stand_base             -> stand
     | "to" _stand_base               -> stand
@@ -83,14 +102,18 @@ _modal: "should" | "must" | "has" "to" | "have" "to" | "needs" "to" | "need" "to
       | "shall" | "ought" "to" | "is" "to" | "are" "to" | "should" "now" | "must" "now"
 _do: "does" | "do" | "did"
 
-complements: comp (_and? comp)*
+complements: _particle? comp (_and? comp)*
+_particle: "down" | "back" | "back" "down" | "down" "again"
 comp: _on table                      -> on_table
     | _on nps                        -> on
     | _end_at "the" side "end" ("of" nps)?     -> on_end
     | _end_at nps "'s" side "end"    -> on_end_named
+    | _end_at "the" _opposite "end" ("of" nps)? -> on_other_end
     | _on _ground                    -> off_table
     | _off table                     -> off_table
     | _off nps                       -> off
+    | "from" table                   -> off_table
+    | "from" nps                     -> source
     | _left_of nps                   -> left_of
     | _right_of nps                  -> right_of
     | _front_of nps                  -> in_front_of
@@ -104,14 +127,30 @@ comp: _on table                      -> on_table
     | _across                        -> across
     | _lengthwise                    -> lengthwise
     | "not" comp                     -> not_
+    | "no" "longer" comp             -> no_longer
+    | "between" nps                  -> between
+    | _under nps                     -> gone
+    | "where" np _was                -> where
+    | _turned angle                  -> turned
     | "neither" comp "nor" comp      -> neither
 !side: "left" | "right"
+_opposite: "other" | "opposite"
+_under: "under" | "underneath" | "beneath" | "below"
+_was: "was" | "is" | "were" | "are" | "used" "to" "be" | "stood" | "sat" | "lay" | "started" | "was" "before"
+    | "is" "now" | "stands" | "sits" | "rests"
+_turned: "turned" | "rotated" | "spun" | "twisted"
+angle: "by"? degrees ("degrees" | "degree")?
+     | "by"? "a" degrees "turn"?
+     | "halfway"? "around"               -> half_turn
+     | "halfway"? "round"                -> half_turn
+!degrees: "30" | "45" | "60" | "90" | "120" | "135" | "180" | "270" | "360" | "ninety" | "quarter" | "half"
+_viewer: "the" "robot" | "you" | "me" | "the" "camera" | "us" | "the" "viewer" | "the" "arm"
 table: "the" "table" | "the" "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
 _ground: "the" "floor" | "the" "ground"
 _on: "on" | "onto" | "upon" | "atop" | "on" "top" "of" | "onto" "the" "top" "of" | "up" "on"
-   | "up" "onto" | "on" "to" | "in" "place" "on"
+   | "up" "onto" | "on" "to" | "in" "place" "on" | "to" | "over" "to" | "across" "to" | "up" "to"
 _end_at: _on | "at"
-_off: "off" | "off" "of" | "from" | "fallen" "off" | "fell" "off" | "rolled" "off" | "knocked" "off"
+_off: "off" | "off" "of" | "fallen" "off" | "fell" "off" | "rolled" "off" | "knocked" "off"
     | "pushed" "off" | "thrown" "off" | "taken" "off" | "removed" "from" | "no" "longer" "on"
 _left_of: "left" "of" | "to" "the" "left" "of" | "on" "the" "left" "of" | "on" "the" "left" "side" "of"
         | "to" "the" "left" "side" "of" | "at" "the" "left" "of"
@@ -135,7 +174,18 @@ _held: "held" | "in" "the" "gripper" | "in" "the" "robot" "'s" "hand" | "in" "th
 _across: "across" | "turned" "across" | "lying" "across" | "left" "to" "right" | "crosswise" | "crossways"
        | "from" "left" "to" "right" | "side" "to" "side"
 _lengthwise: "lengthwise" | "lengthways" | "turned" "lengthwise" | "lying" "lengthwise" | "front" "to" "back"
-           | "away" "from" "the" "camera" | "pointing" "away" "from" "the" "camera" | "pointing" "away"
+           | "away" "from" _viewer | "pointing" "away" "from" _viewer | "pointing" "away" | "towards" _viewer
+           | "toward" _viewer | "pointing" "towards" _viewer | "pointing" "toward" _viewer
+
+// verbs that say a state without a complement: "make the ball disappear"
+vstate: _vanish                           -> gone
+      | _toppling                         -> tipped
+      | _fall_off table                   -> off_table
+      | _fall_off nps                     -> off
+_toppling: _fall_verb "over" | _fall_verb "down" | "topple" | "topple" "over" | "tip" "over" | "tip" | "fall"
+_fall_off: _fall_verb "off" | _fall_verb "off" "of"
+_vanish: "disappear" | "vanish" | "go" "away" | "go" "missing" | "leave" "the" "table"
+_fall_verb: "fall" | "roll" | "drop" | "slip" | "slide" | "tumble" | "get" "knocked" | "be" "knocked"
 
 // ------------------------------------------------------------------ instructions
 command: _polite* action _tail?                        -> do
@@ -150,6 +200,15 @@ _tail: "please" | "for" "me" | "thanks" | "thank" "you" | "now" | "," "please" |
      | "right" "now" | "if" "you" "can"
 _dont: "do" "not" | "never" | "be" "careful" "not" "to" | "take" "care" "not" "to"
 action: _put nps complements                  -> put
+      | _put _particle nps complements        -> put
+      | _putdown nps "down"                   -> put_down
+      | _putdown "down" nps                   -> put_down
+      | _make nps vstate                      -> put
+      | _turn nps angle?                      -> turn
+      | _swap nps                             -> swap
+      | _swap nps "with" nps                  -> swap
+      | _swap "the" ("places" | "positions" | "spots") "of" nps -> swap
+      | _hide nps (_hide_at nps)?             -> rid
       | _stand_verb nps complements           -> put_standing
       | _stand_verb nps "up"                  -> stand_up
       | _stand_verb "up" nps                  -> stand_up
@@ -162,6 +221,7 @@ action: _put nps complements                  -> put
       | _tip nps "over"                       -> tip
       | _topple nps                           -> tip
       | _rid nps                              -> rid
+      | _rid nps _hide_at nps                 -> rid
       | "throw" "away" nps                    -> rid
 ing: _tip_ing "over" nps                      -> tip
    | _tip_ing nps "over"                      -> tip
@@ -169,17 +229,27 @@ ing: _tip_ing "over" nps                      -> tip
    | _push_ing nps _off table                 -> rid
    | _push_ing nps _off nps                   -> ing_off
    | "dropping" nps                           -> rid
+_putdown: "put" | "set" | "lay" | "place"
+_make: "make" | "let" | "have" | "get"
+_turn: "turn" | "rotate" | "spin" | "twist" | "swivel" | "pivot" | "reorient"
+_swap: "swap" | "switch" | "exchange" | "trade" | "interchange"
+_hide: "hide" | "conceal" | "tuck"
+_hide_at: _under | "behind"
 _put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "carry" | "slide" | "push"
+    | "balance" | "transfer" | "shift" | "relocate" | "return" | "deposit" | "park" | "plop" | "plonk"
+    | "raise" | "send" | "bump" | "tap" | "poke" | "hit" | "dump" | "perch" | "settle" | "let" | "center"
+    | "centre" | "arrange" | "line" | "stick" | "land"
     | "shove" | "roll" | "throw" | "toss" | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
     | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
     | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
 _stand_verb: "stand"
 _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect" | "grip" | "lift" "up"
-     | "hold" "on" "to"
+     | "hold" "on" "to" | "seize" | "catch" | "snatch" | "take" "hold" "of" | "grab" "hold" "of" | "hold" "up"
+     | "raise" "up" | "pick" "out"
 _give: "hand" | "give" | "bring" | "pass" | "fetch"
 _tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
 _topple: "topple" | "upset" | "overturn"
-_rid: "hide" | "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
+_rid: "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
 _tip_ing: "knocking" | "tipping" | "pushing" | "turning"
 _push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
 
@@ -188,36 +258,39 @@ nps: np
    | np ("," np)* ","? "and" np          -> all_of
    | "both" np "and" np                  -> all_of
    | "neither" np "nor" np               -> neither_of
-np: _the _mods noun _posts               -> one
-  | _a _mods noun _posts                 -> some
-  | _every _mods noun _posts             -> every
-  | _all _mods nouns _posts              -> every
-  | "the" _mods nouns _posts             -> every
-  | _both _mods nouns _posts             -> both
-  | "the" number _mods nouns _posts      -> counted
-  | "all" number _mods nouns _posts      -> counted
-  | number _mods nouns _posts            -> counted
-  | "no" _mods noun _posts               -> none
-  | "no" _mods nouns _posts              -> none
-  | "none" "of" "the" _mods nouns _posts -> none
+   | _the shared ("," _the? shared)* ","? "and" _the? _mods (noun | nouns) _posts -> shared_noun
+shared: mod+
+np: det _mods noun _posts                -> np_one
+  | det _mods nouns _posts               -> np_many
+  | "the" "other" number _posts          -> other_all
+  | "the" "others"                       -> other_all
   | "it"                                 -> it
   | "them"                               -> them
   | "they"                               -> them
   | "everything"                         -> everything
+// the determiner says how many the noun names (`parses.DETERMINERS`)
+!det: "the" | "this" | "that" | "my" | "a" | "an" | "one" "of" "the" | "any" | "every" | "each" | "all"
+    | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the" | "both" | "both" "the"
+    | "both" "of" "the" | "the" number | "all" number | number | "no" | "none" "of" "the" | "the" "other"
+    | "the" "other" number
 _the: "the" | "this" | "that" | "my"
 _a: "a" | "an" | "one" "of" "the" | "any"
 _every: "every" | "each"
 _all: "all" | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the"
 _both: "both" | "both" "the" | "both" "of" "the"
 !number: "two" | "three"
-_mods: mod*
+_mods: (mod | bare)*
+bare: "empty" | "free" | "bare" | "unoccupied" | "vacant"
 !mod: "blue" | "red" | "black" | "yellow" | "left" | "right" | "middle" | "centre" | "center" | "leftmost"
     | "rightmost" | "first" | "second" | "third" | "last" | "front" | "back" | "rear" | "near" | "far"
     | "nearest" | "farthest" | "furthest" | "closest" | "left" "hand" | "right" "hand" | "central"
+    | "nearer" | "closer" | "farther" | "further"
 !noun: "cup" | "mug" | "ball" | "sphere" | "support" | "pillar" | "pedestal" | "block" | "brick" | "plank"
-     | "beam" | "bar" | "one" | "thing" | "object"
+     | "beam" | "bar" | "board" | "slab" | "post" | "stand" | "column" | "pole" | "cylinder" | "glass"
+     | "marble" | "one" | "thing" | "object"
 !nouns: "cups" | "mugs" | "balls" | "spheres" | "supports" | "pillars" | "pedestals" | "blocks" | "bricks"
-      | "planks" | "beams" | "bars" | "ones" | "things" | "objects"
+      | "planks" | "beams" | "bars" | "boards" | "slabs" | "posts" | "stands" | "columns" | "poles"
+      | "cylinders" | "glasses" | "marbles" | "ones" | "things" | "objects"
 _posts: post*
 ?post: _left_of np                       -> left_of
     | _right_of np                       -> right_of
@@ -227,9 +300,22 @@ _posts: post*
     | _on table                          -> on_table
     | _that head complements             -> that
     | _near np                           -> nearest
+    | _closest _viewer                   -> viewer_near
+    | _farthest _viewer                  -> viewer_far
+    | _except nps                        -> except_
+    | _that? np _rests_on                -> bears
+    | "with" np ("on" "it" | "on" "top" | "on" "top" "of" "it")          -> bears
+    | "from" np                          -> on
     | place
     | "from" "the" side                  -> counted_from
 _that: "that" | "which"
+_closest: "nearest" | "nearest" "to" | "closest" "to" | "nearer" "to" | "closer" "to" | "next" "to"
+_farthest: "farthest" "from" | "furthest" "from" | "farther" "from" | "further" "from" | "far" "from"
+         | "away" "from"
+_except: "except" | "except" "for" | "other" "than" | "apart" "from" | "besides" | "save" | "excluding"
+_rests_on: _rest_verb "on" | _rest_verb "on" "top" "of" | _rest_verb "upon"
+_rest_verb: "is" | "was" | "sits" | "sat" | "rests" | "stands" | "lies" | "is" "sitting" | "is" "resting"
+          | "is" "standing" | "is" "lying"
 _near: "nearest" | "nearest" "to" | "closest" "to" | "next" "to" | "beside" | "near" | "by"
 !place: "on" "the" "left" | "on" "the" "right" | "to" "the" "left" | "to" "the" "right"
             | "in" "the" "middle" | "in" "the" "centre" | "in" "the" "center" | "at" "the" "front"
@@ -270,6 +356,11 @@ _CONTRACTIONS = (
 )
 
 
+# Chat spellings, spelt out as contractions are (a misspelt word is not guessed: it is refused
+# with the spelling that reads offered).
+_SPELT = {"u": "you", "pls": "please", "plz": "please", "thx": "thanks", "ur": "your", "r": "are"}
+
+
 def words(text: str) -> list[str]:
     """The sentence as the grammar's words: lower case, contractions spelt out ("isn't": "is
     not", "block's": "block 's"), hyphens as spaces, commas kept as words of their own (they
@@ -277,15 +368,81 @@ def words(text: str) -> list[str]:
     t = text.lower().replace("\u2019", "'").replace("\u2018", "'")
     for pattern, spelt in _CONTRACTIONS:
         t = re.sub(pattern, spelt, t)
+    t = re.sub(r"(\d)\s*(°|º|deg\b)", r"\1 degrees", t)
+    t = t.replace("&", " and ")
     t = re.sub(r"[;:]", ",", t)
     t = re.sub(r"[-/]", " ", t)
     t = re.sub(r"[.!?\"()]", " ", t)
     t = t.replace(",", " , ")
-    return t.split()
+    return [_SPELT.get(w, w) for w in t.split()]
+
+
+# ---------------------------------------------------------------------------- the parser
+_RULE = re.compile(r"^([!?]?_?[a-z]\w*)\s*:(.*)$")
+_LEADING_WORD = re.compile(r'^\s*"([^"\s]+)"\s*(.*?)\s*$')
+
+
+def _alternatives(body: str) -> list[str]:
+    """A rule's body split at its top-level "|" (not inside brackets or quotes)."""
+    alts, depth, quoted, current = [], 0, False, ""
+    for ch in body:
+        quoted = quoted != (ch == '"')
+        if not quoted and ch in "([":
+            depth += 1
+        elif not quoted and ch in ")]":
+            depth -= 1
+        elif not quoted and ch == "|" and depth == 0:
+            alts.append(current)
+            current = ""
+            continue
+        current += ch
+    return [*alts, current]
+
+
+def classed(grammar: str) -> tuple[str, dict[str, frozenset[str]]]:
+    """The grammar with each rule's alternatives that differ only in their first word (three
+    one-word alternatives or more, or two longer ones) made one: that word a word class, a
+    terminal of its own, and the words of each class. Earley predicts every alternative of a
+    rule it expects: a verb class of 50 words is 50 items at every place a verb may start, and
+    one terminal is one item (a parse takes less than half the time)."""
+    definitions: list[list[str]] = []
+    for line in grammar.split("\n"):
+        if _RULE.match(line) or not definitions or not line.startswith(" ") or not line.strip():
+            definitions.append([line])
+        else:
+            definitions[-1].append(line)
+    out: list[str] = []
+    classes: dict[str, frozenset[str]] = {}
+    for lines in definitions:
+        m = _RULE.match(lines[0])
+        if m is None:
+            out += lines
+            continue
+        alts = _alternatives(re.sub(r"//[^\n]*", "", " ".join([m.group(2), *lines[1:]])))
+        tails: dict[str, list[str]] = {}
+        for a in alts:
+            w = _LEADING_WORD.match(a)
+            if w is not None:
+                tails.setdefault(w.group(2), []).append(w.group(1))
+        kept: list[str] = []
+        for a in alts:
+            w = _LEADING_WORD.match(a)
+            words = tails.get(w.group(2), []) if w is not None else []
+            if w is None or len(words) < (3 if not w.group(2) else 2):
+                kept.append(a.strip())
+            elif words[0] == w.group(1):
+                # an underscore: the class's token is left out of the tree, as a quoted word's is
+                name = f"_W_{m.group(1).strip('!?_').upper()}_{len(classes)}"
+                classes[name] = frozenset(words)
+                kept.append(f"{name} {w.group(2)}".strip())
+                out.append(f"{name}: " + " | ".join(f'"{x}"' for x in dict.fromkeys(words)))
+        out.append(f"{m.group(1)}: {' | '.join(kept)}")
+    return "\n".join(out), classes
 
 
 class _Words(Lexer):
-    """Each word of a normalised sentence is one token, of the terminal that spells it."""
+    """Each word of a normalised sentence is one token: of the terminal that spells it, or of
+    none where only word classes hold it (`_member` matches those)."""
 
     def __init__(self, lexer_conf) -> None:
         self.types = {t.pattern.value: t.name for t in lexer_conf.terminals if t.pattern.type == "str"}
@@ -294,21 +451,45 @@ class _Words(Lexer):
         pos = 0
         for i, word in enumerate(data.split(" ")):
             # The column is the word's index: where a parse fails is named as a word.
-            yield Token(self.types[word], word, start_pos=pos, end_pos=pos + len(word), line=1, column=i)
+            kind = self.types.get(word, "WORD")
+            yield Token(kind, word, start_pos=pos, end_pos=pos + len(word), line=1, column=i)
             pos += len(word) + 1
+
+
+@functools.cache
+def _grammar() -> tuple[str, dict[str, frozenset[str]], dict[str, frozenset[str]]]:
+    """The grammar with its word classes, each class's words, and each word's classes."""
+    text, classes = classed(GRAMMAR)
+    member: dict[str, set[str]] = {}
+    for name, ws in classes.items():
+        for w in ws:
+            member.setdefault(w, set()).add(name)
+    return text, classes, {w: frozenset(names) for w, names in member.items()}
+
+
+def _member(term, token) -> bool:
+    """Does the token's word fit the terminal: its own, or a word class that holds it."""
+    return term.name == token.type or term.name in _grammar()[2].get(token.value, ())
 
 
 @functools.cache
 def parser() -> Lark:
     """The grammar built once (Earley: natural sentences are ambiguous, and every parse is
     kept so that the scene can tell which is meant)."""
-    return Lark(GRAMMAR, parser="earley", lexer=_Words, ambiguity="explicit", propagate_positions=True)
+    lark = Lark(_grammar()[0], parser="earley", lexer=_Words, ambiguity="explicit", propagate_positions=True)
+    earley = lark.parser.parser
+    # lark's Earley matches a terminal to a token by name; a word class is matched by
+    # membership instead (`classed`)
+    assert hasattr(earley, "term_matcher"), "lark's Earley parser changed: see grammar.classed"
+    earley.term_matcher = _member
+    return lark
 
 
 @functools.cache
 def known_words() -> frozenset[str]:
     """Every word the grammar reads."""
-    return frozenset(t.pattern.value for t in parser().lexer_conf.terminals if t.pattern.type == "str")
+    spelt = {t.pattern.value for t in parser().lexer_conf.terminals if t.pattern.type == "str"}
+    return frozenset(spelt.union(*_grammar()[1].values()))
 
 
 def read(text: str) -> list[tuple[Item, ...]]:

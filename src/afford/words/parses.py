@@ -26,6 +26,15 @@ KINDS = {
     "plank": "block",
     "beam": "block",
     "bar": "block",
+    "board": "block",
+    "slab": "block",
+    "post": "support",
+    "stand": "support",
+    "column": "support",
+    "pole": "support",
+    "cylinder": "support",
+    "glass": "cup",
+    "marble": "ball",
     "one": None,
     "thing": None,
     "object": None,
@@ -50,11 +59,15 @@ ORDER = {
     "near": ("y", 0),
     "nearest": ("y", 0),
     "closest": ("y", 0),
+    "nearer": ("y", 0),
+    "closer": ("y", 0),
     "back": ("y", -1),
     "rear": ("y", -1),
     "far": ("y", -1),
     "farthest": ("y", -1),
     "furthest": ("y", -1),
+    "farther": ("y", -1),
+    "further": ("y", -1),
 }
 PLACES = {  # "the cup on the left": an order word said after the noun
     "left": "left",
@@ -66,6 +79,27 @@ PLACES = {  # "the cup on the left": an order word said after the noun
     "back": "back",
 }
 COLOUR_WORDS = ("blue", "red", "black", "yellow")
+# Plural nouns by their singular: "glasses" is not "glasse".
+PLURAL_NOUNS = {"glasses": "glass", "marbles": "marble", "others": "one"}
+# Words that say an object has nothing on it ("the empty support").
+BARE_WORDS = ("empty", "free", "bare", "unoccupied", "vacant", "clear")
+# A turn by its angle in degrees: a quarter turn changes how the block lies, a half turn
+# leaves it as it was; no angle ("turn the block") is a quarter turn.
+TURNS = {"quarter": 90, "half": 180, "around": 180, "ninety": 90}
+
+
+# Determiners by the quantity they give a singular and a plural noun ("the cup": one, "the
+# cups": every); a number word among them ("the two cups") counts the plural.
+DETERMINERS = {
+    **dict.fromkeys(("the", "this", "that", "my"), ("one", "every")),
+    **dict.fromkeys(("a", "an", "any"), ("some", "every")),
+    "one of the": ("some", "some"),
+    **dict.fromkeys(("every", "each"), ("every", "every")),
+    **dict.fromkeys(("all", "all the", "all of the", "each of the", "any of the"), ("every", "every")),
+    **dict.fromkeys(("both", "both the", "both of the"), ("both", "both")),
+    **dict.fromkeys(("no", "none of the"), ("none", "none")),
+    "the other": ("one", "every"),
+}
 
 
 @dataclass(frozen=True)
@@ -77,7 +111,11 @@ class Noun:
     cups"), "both", "two"/"three" ("the two cups"), "none" ("no cup"), "it", "them",
     "everything"; denied: the clauses about it are negated ("neither the cup nor the ball",
     "no cup"); colour and order words; restrict: relations it must stand in on the start
-    scene ("the cup left of the ball", "the cup that is upright")."""
+    scene ("the cup left of the ball", "the cup that is upright"); bare: nothing rests on it ("the
+    empty support"); other: not the objects said before it nor what its subject rests on ("the
+    other support"); excluded: the objects it leaves out ("every cup except the middle one");
+    bears: what rests on it ("the support the ball is on"); quantity "host": what the noun of
+    `bears` rests on at the start, the table included ("where the ball was")."""
 
     words: str
     kind: str | None
@@ -88,6 +126,10 @@ class Noun:
     restrict: tuple[Pred, ...] = ()
     nearest: tuple[Noun, ...] = ()
     denied: bool = False
+    bare: bool = False
+    other: bool = False
+    excluded: tuple[Noun, ...] = ()
+    bears: tuple[Noun, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -97,7 +139,8 @@ class Pred:
     host: the block an end belongs to ("the left end of the block"); implied: said by a verb
     ("stands on" implies upright) and dropped where the subject cannot take it; passing: held
     on the way ("pick up the cup and put it on the block"), dropped when a later clause of the
-    sentence puts its subject somewhere."""
+    sentence puts its subject somewhere; source: where the subject starts ("from the support"),
+    its name read as what the subject rests on where it names several."""
 
     relation: str
     other: tuple[Noun, ...] | str | None = None
@@ -105,6 +148,7 @@ class Pred:
     host: tuple[Noun, ...] = ()
     implied: bool = False
     passing: bool = False
+    source: bool = False
 
 
 @dataclass(frozen=True)
@@ -124,6 +168,15 @@ def _nouns(x) -> tuple[Noun, ...]:
 
 def _negate(preds: tuple[Pred, ...]) -> tuple[Pred, ...]:
     return tuple(replace(p, negated=not p.negated) for p in preds)
+
+
+def _no_longer(preds: tuple[Pred, ...]) -> tuple[Pred, ...]:
+    """Read "no longer" as "off": "no longer on the table" is gone, as "off the table" is (the
+    taught phrasing), and "no longer" before anything else denies it."""
+    return tuple(
+        Pred("gone") if p.relation == "on" and p.other == "table" and not p.negated else _negate((p,))[0]
+        for p in preds
+    )
 
 
 def _first_negated(preds: tuple[Pred, ...]) -> tuple[Pred, ...]:
@@ -157,7 +210,7 @@ class Build(Transformer):
         return Item(_nouns(c[0]), c[1])
 
     def ditto(self, meta, c):
-        return Item(_nouns(c[0]), None)
+        return Item(tuple(n for x in c for n in _nouns(x)), None)
 
     def holds(self, meta, c):
         return Item(_nouns(c[0]), (Pred("held"),))
@@ -174,6 +227,8 @@ class Build(Transformer):
         head, preds = c
         if head == "no":
             return _first_negated(preds)
+        if head == "no longer":
+            return _no_longer(preds[:1]) + preds[1:]
         if head == "stand":
             return (Pred("upright", implied=True), *preds)
         return preds
@@ -186,6 +241,18 @@ class Build(Transformer):
 
     def no(self, meta, c):
         return "no"
+
+    def nolonger(self, meta, c):
+        return "no longer"
+
+    def vp_do(self, meta, c):
+        return c[-1]
+
+    def vp_dont(self, meta, c):
+        return _negate(c[-1])
+
+    def no_longer(self, meta, c):
+        return _no_longer(c[0])
 
     def stand(self, meta, c):
         return "stand"
@@ -216,6 +283,14 @@ class Build(Transformer):
 
     def off_table(self, meta, c):
         return (Pred("gone"),)
+
+    def source(self, meta, c):
+        # "move the ball from the support onto the block": where it starts, kept only where
+        # nothing later in the sentence puts it somewhere
+        return (Pred("on", _nouns(c[0]), negated=True, passing=True, source=True),)
+
+    def on_other_end(self, meta, c):
+        return (Pred("on_end", "other", host=_nouns(c[0]) if c else ()),)
 
     def off(self, meta, c):
         return (Pred("on", _nouns(c[0]), negated=True),)
@@ -256,6 +331,25 @@ class Build(Transformer):
     def lengthwise(self, meta, c):
         return (Pred("lies", "lengthwise"),)
 
+    def between(self, meta, c):
+        return (Pred("between", _nouns(c[0])),)
+
+    def where(self, meta, c):
+        return (Pred("on", (Noun(self._said(meta), None, "host", bears=_nouns(c[0])),)),)
+
+    def turned(self, meta, c):
+        return (Pred("turn", c[0] if c else 90),)
+
+    def angle(self, meta, c):
+        return next(int(x) for x in c if isinstance(x, int))
+
+    def half_turn(self, meta, c):
+        return 180
+
+    def degrees(self, meta, c):
+        word = str(c[0])
+        return TURNS[word] if word in TURNS else int(word)
+
     def not_(self, meta, c):
         return _negate(c[0])
 
@@ -271,6 +365,10 @@ class Build(Transformer):
         subjects, preds = c[0]
         return Item(subjects, _negate(preds), instruction=True)
 
+    def purpose(self, meta, c):
+        # "turn the block so that it points away": the instruction and the state it is for
+        return tuple(c)
+
     def without(self, meta, c):
         (subjects, preds), (others, avoided) = c
         # Two items in one: the "without" part is said of its own objects.
@@ -284,6 +382,15 @@ class Build(Transformer):
 
     def stand_up(self, meta, c):
         return _nouns(c[0]), (Pred("upright"),)
+
+    def put_down(self, meta, c):
+        return _nouns(c[0]), (Pred("on", "table"),)
+
+    def turn(self, meta, c):
+        return _nouns(c[0]), (Pred("turn", c[1] if len(c) > 1 else 90),)
+
+    def swap(self, meta, c):
+        return tuple(n for x in c for n in _nouns(x)), (Pred("swap"),)
 
     def take(self, meta, c):
         return _nouns(c[0]), (Pred("held", passing=True),)
@@ -301,18 +408,39 @@ class Build(Transformer):
     def all_of(self, meta, c):
         return tuple(n for x in c for n in _nouns(x))
 
+    def shared(self, meta, c):
+        return ("mods", c)
+
+    def shared_noun(self, meta, c):
+        """For "the left and the right cup": one noun said once for several sets of words."""
+        groups = [x[1] for x in c if isinstance(x, tuple) and x[0] == "mods"]
+        rest = [x for x in c if not (isinstance(x, tuple) and x[0] == "mods")]
+        noun = next(x for x in rest if isinstance(x, tuple) and x[0] == "noun")
+        last = [x for x in rest if isinstance(x, tuple) and x[0] == "mod"]
+        out = []
+        for mods in [*groups, last]:
+            said = " ".join(["the", *(m[1] for m in mods), noun[1]])
+            out.append(replace(self._noun(meta, [*mods, noun], "one"), words=said))
+        posts = [x for x in rest if not (isinstance(x, tuple) and x[0] in ("mod", "noun"))]
+        if posts:
+            out[-1] = replace(out[-1], restrict=self._noun(meta, [noun, *posts], "one").restrict)
+        return tuple(out)
+
     def neither_of(self, meta, c):
         return tuple(replace(n, denied=True) for x in c for n in _nouns(x))
 
     def nps(self, meta, c):
         return c[0]
 
-    def _noun(self, meta, c, quantity: str) -> Noun:
+    def _noun(self, meta, c, quantity: str, other: bool = False) -> Noun:
         kind: str | None = None
         colour: str | None = None
         order: list[str] = []
         restrict: list[Pred] = []
         nearest: list[Noun] = []
+        bears: list[Noun] = []
+        excluded: list[Noun] = []
+        bare = False
         from_right = False
         for x in c:
             if isinstance(x, str):  # a number word: "the two cups"
@@ -330,6 +458,12 @@ class Build(Transformer):
                 from_right = x[1] == "right"
             elif x[0] == "nearest":
                 nearest.extend(x[1])
+            elif x[0] == "bare":
+                bare = True
+            elif x[0] == "bears":
+                bears.extend(x[1])
+            elif x[0] == "except":
+                excluded.extend(x[1])
         return Noun(
             self._said(meta),
             kind,
@@ -340,10 +474,53 @@ class Build(Transformer):
             tuple(restrict),
             tuple(nearest),
             denied=quantity == "none",
+            bare=bare,
+            other=other,
+            excluded=tuple(excluded),
+            bears=tuple(bears),
         )
 
     def one(self, meta, c):
         return self._noun(meta, c, "one")
+
+    def det(self, meta, c):
+        return ("det", " ".join(str(w) for w in c))
+
+    def _determined(self, meta, c, plural: bool) -> Noun:
+        said = next(x[1] for x in c if isinstance(x, tuple) and x[0] == "det")
+        words = said.split()
+        key = " ".join(w for w in words if w not in ("two", "three"))
+        counted = [w for w in words if w in ("two", "three")]
+        quantity = counted[0] if counted and plural else DETERMINERS.get(key, ("one", "every"))[int(plural)]
+        rest = [x for x in c if not (isinstance(x, tuple) and x[0] == "det")]
+        return self._noun(meta, rest, quantity, other=key == "the other")
+
+    def np_one(self, meta, c):
+        return self._determined(meta, c, plural=False)
+
+    def np_many(self, meta, c):
+        return self._determined(meta, c, plural=True)
+
+    def other_one(self, meta, c):
+        return self._noun(meta, c, "one", other=True)
+
+    def other_all(self, meta, c):
+        return self._noun(meta, c, "every", other=True)
+
+    def except_(self, meta, c):
+        return ("except", _nouns(c[0]))
+
+    def bears(self, meta, c):
+        return ("bears", _nouns(c[0]))
+
+    def bare(self, meta, c):
+        return ("bare",)
+
+    def viewer_near(self, meta, c):
+        return ("place", "front")
+
+    def viewer_far(self, meta, c):
+        return ("place", "back")
 
     def some(self, meta, c):
         return self._noun(meta, c, "some")
@@ -379,7 +556,8 @@ class Build(Transformer):
         return ("noun", str(c[0]))
 
     def nouns(self, meta, c):
-        return ("noun", str(c[0])[:-1])  # "cups": "cup"
+        word = str(c[0])
+        return ("noun", PLURAL_NOUNS.get(word, word[:-1]))  # "cups": "cup"
 
     def place(self, meta, c):
         return ("place", next(PLACES[str(w)] for w in reversed(c) if str(w) in PLACES))

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from afford.sim.constants import WORDS
-from afford.words import grammar
+from afford.words import derived, grammar
 from afford.words.clauses import Clause
 from afford.words.facts import RELATIONS, Fact, State
 from afford.words.parses import ORDER, Item, Noun, Pred
@@ -39,6 +39,10 @@ SAID = {
     "behind": "behind something",
 }
 QUANTITIES = {"both": 2, "two": 2, "three": 3}
+# The relation whose kinds a pseudo-relation (`derived.py`) is said of.
+STANDS_FOR = {"turn": "lies", "between": "left_of", "swap": "left_of"}
+SAID |= {"turn": "turned", "between": "between two objects", "swap": "swapped"}
+PLACES = ("on", "on_end", "left_of", "right_of", "in_front_of", "behind", "lies")  # what a gone object is not
 
 
 class Unresolved(Exception):
@@ -101,6 +105,9 @@ class _Context:
     # "the right one": the kind of the last noun said in the same role (subject or other)
     kinds: dict[str, str] = field(default_factory=dict)
     role: str = "subject"
+    subject: int | None = None  # the subject of the clause being read, for "the other support"
+    inner: list[int] = field(default_factory=list)  # named inside the item's names, for "it"
+    source: int | None = None  # the subject whose start a "from" phrase names
 
 
 def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
@@ -114,8 +121,10 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
         return list(context.subjects)
     if noun.quantity == "everything":
         return sorted(state.members)
+    if noun.quantity == "host":
+        raise Unresolved(f"{noun.words!r} names a place, not an object", noun.words)
     kind = noun.kind
-    if kind is None and noun.colour is None and noun.words.split()[-1] in ("one", "ones"):
+    if kind is None and noun.colour is None and (noun.other or noun.words.split()[-1] in ("one", "ones")):
         kind = context.kinds.get(context.role)
     role = context.role
     fits = [k for k in sorted(state.members) if kind is None or state.kind(k) == kind]
@@ -135,6 +144,9 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
         before = len(fits)
         fits = _nearest(noun, fits, other, state, context)
         context.loose += before == 1
+    if kind is not None:  # "every cup except the middle one": the one is a cup
+        context.kinds[role] = kind
+    fits = _described(noun, fits, state, context)
     if not fits:
         raise Unresolved(f"{noun.words!r} names no object of the scene", noun.words, _own(noun))
     for word in noun.order:
@@ -142,6 +154,30 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
     if kind is not None:  # after the phrases inside it ("the cup left of the ball": cup)
         context.kinds[role] = kind
     return _counted(noun, fits, state)
+
+
+def _described(noun: Noun, fits: list[int], state: State, context: _Context) -> list[int]:
+    """`fits` narrowed by what the phrase says of them on the start scene: nothing on it ("the
+    empty support"), something on it ("the support the ball is on"), not the ones left out
+    ("except the middle one"), not the ones said before ("the other support")."""
+    if context.source is not None and len(fits) > 1:  # "from the support": the one it is on
+        fits = [k for k in fits if k in derived.bearing_of(state, context.source)] or fits
+    if noun.bare:
+        fits = [k for k in fits if not derived.bearing(state, k)]
+    for other in noun.bears:
+        borne = resolve(other, state, context)
+        context.inner += borne
+        fits = [k for k in fits if all(b in derived.bearing(state, k) for b in borne)]
+    for other in noun.excluded:
+        left_out = set(resolve(other, state, context))
+        fits = [k for k in fits if k not in left_out]
+    if noun.other:
+        said = {k for group in context.mentioned for k in group}
+        try:
+            fits = derived.other_than(noun, fits, said, context.subject, state)
+        except derived.Unsaid as e:
+            raise Unresolved(e.reason, e.phrase, _own(noun)) from None
+    return fits
 
 
 def _own(noun: Noun) -> tuple[str, ...]:
@@ -171,6 +207,7 @@ def _holds_of(pred: Pred, k: int, state: State, context: _Context) -> bool:
         return False
     if isinstance(pred.other, tuple):
         others = [o for n in pred.other for o in resolve(n, state, context)]
+        context.inner += others
         facts = [Fact(pred.relation, k, o) for o in others if o != k]
         if len(facts) < len(others):
             return False
@@ -184,6 +221,7 @@ def _nearest(noun: Noun, fits: list[int], other: Noun, state: State, context: _C
     if other.quantity == "it":
         raise Unresolved(f"{noun.words!r}: say what it is near by name", noun.words)
     (o, *more) = _counted(other, resolve(other, state, context), state)
+    context.inner.append(o)
     if more:
         raise Unresolved(f"{noun.words!r}: near one object, not {len(more) + 1}", noun.words)
     ranked = sorted(
@@ -280,8 +318,9 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
         others_said: list[int] = []
         known: dict[int, list[int]] = {}
         for pred in preds:
-            relation = RELATIONS[pred.relation]
-            for s, noun in _slots(item.subjects, relation.subjects, state, context, known=known):
+            relation = RELATIONS[STANDS_FOR.get(pred.relation, pred.relation)]
+            subjects = _slots(item.subjects, relation.subjects, state, context, known=known)
+            for s, noun in subjects:
                 subjects_said.append(s)
                 if state.kind(s) not in relation.subjects:
                     if pred.implied or _quietly(noun):
@@ -292,15 +331,54 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
                         noun.words,
                         relation.subjects,
                     )
-                for other in _others(pred, s, state, context):
+                context.subject = s
+                context.mentioned[0:0] = [subjects_said, context.inner]
+                context.source = s if pred.source else None
+                try:
+                    pairs = _pairs(pred, s, noun, subjects, state, context)
+                except derived.Unsaid as e:
+                    raise Unresolved(e.reason, e.phrase) from None
+                finally:
+                    del context.mentioned[0:2]
+                    context.source = None
+                for name, other in pairs:
                     if isinstance(other, int):
                         others_said.append(other)
                     denied = noun.denied != pred.negated
-                    said.append((Clause(Fact(pred.relation, s, other), denied), pred.passing))
-        context.mentioned = [subjects_said, others_said, *context.mentioned]
+                    said.append((Clause(Fact(name, s, other), denied), pred.passing))
+        context.mentioned = [subjects_said, others_said, context.inner, *context.mentioned]
+        context.inner = []
         context.subjects = list(dict.fromkeys(subjects_said)) or context.subjects
         last_preds = preds
     return _settled(said, state), context.loose
+
+
+def _pairs(
+    pred: Pred, s: int, noun: Noun, subjects, state: State, context: _Context
+) -> list[tuple[str, object]]:
+    """The clauses (relation, other) that `pred` makes of subject s: one per other argument,
+    or those a scene-dependent phrase means at the start (`derived.py`)."""
+    name = _listed(state, [s])
+    if pred.relation == "turn":
+        return [("lies", derived.turned(state, s, int(pred.other), noun.words))]  # type: ignore[arg-type]
+    if pred.relation == "between":
+        ends = [k for n in pred.other for k in resolve(n, state, context)]  # type: ignore[union-attr]
+        return derived.between(state, ends, " and ".join(n.words for n in pred.other))  # type: ignore[union-attr]
+    if pred.relation == "swap":
+        partners = [k for k, _ in subjects if k != s]
+        if len(subjects) != 2 or len(partners) != 1:
+            raise Unresolved(f"a swap is of two objects, not {len(subjects)}", noun.words)
+        words = tuple(n.words for _, n in subjects)
+        return [derived.swapped(state, s, partners[0], (words[0], words[1]))]
+    if isinstance(pred.other, tuple) and len(pred.other) == 1 and pred.other[0].quantity == "host":
+        place = pred.other[0]
+        (b,) = place.bears
+        borne = [s] if b.quantity == "it" else resolve(b, state, context)
+        return [(pred.relation, derived.where(place, s, state, borne))]
+    if pred.relation == "on_end" and pred.other == "other":
+        _others(replace(pred, other="left"), s, state, context)  # the host is the block
+        return [("on_end", derived.other_end(state, s, name))]
+    return [(pred.relation, other) for other in _others(pred, s, state, context)]
 
 
 def _others(pred: Pred, s: int, state: State, context: _Context) -> list[int | str | None]:
@@ -355,6 +433,13 @@ def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...
         if c.fact.relation in ("on", "on_end") and not c.negated and len(places) > 1:
             # an object rests on one thing: a parse that reads two hosts misread the sentence
             raise Unresolved(f"{_listed(state, [c.fact.subject])} cannot be on two things at once")
+        if c.fact.relation == "lies" and not c.negated and len(places) > 1:
+            raise Unresolved(f"{_listed(state, [c.fact.subject])} cannot lie across and lengthwise at once")
+        if c.fact.relation == "gone" and not c.negated:
+            placed = [d for d in kept if d.fact.subject == c.fact.subject and d.fact.relation in PLACES]
+            if any(not d.negated for d in placed):
+                subject = _listed(state, [c.fact.subject])
+                raise Unresolved(f"it says {subject} is gone and also where it should be")
         if Clause(c.fact, not c.negated) in kept:
             subject = _listed(state, [c.fact.subject])
             raise Unresolved(f"it says both that {subject} is {SAID[c.fact.relation]} and that it is not")

@@ -1,0 +1,138 @@
+"""Goals whose clauses depend on where things stand at the start: a turn, "between", a swap,
+"where the ball was", and the noun phrases "the other support", "the empty support", "the
+support the ball is on".
+
+The grammar reads these as pseudo-relations (`Pred("turn", 90)`, `Pred("between", nouns)`,
+`Pred("swap")`) or as marks on a noun phrase (`Noun.other`, `.bare`, `.bears`, quantity
+"host"); here each becomes the facts it means in the task's start scene, so that the goal
+is still a set of clauses over `facts.RELATIONS`, the ones the agreement model scores and the
+success predicate checks:
+
+- a turn is said of the block's lie: a quarter turn (90 or 270 degrees, "a quarter turn", no
+  angle at all) asks for the other lie than the one at the start, a half turn (180, 360,
+  "around") for the same; any other angle is refused, as the block lies only across or
+  lengthwise;
+- "between A and B" is right of the left one and left of the right one (or in front of the
+  back one and behind the front one, where they stand one behind the other);
+- "swap A and B": each on what the other rests on at the start where those differ, else each
+  on the other's side of it;
+- "where B was / is": on what B rests on at the start, the table included.
+"""
+
+from __future__ import annotations
+
+from afford.sim.constants import WORDS
+from afford.words.facts import State, across, lengthwise, on, on_end
+from afford.words.parses import Noun
+
+SIDES = ((0, "right_of", "left_of"), (1, "behind", "in_front_of"))  # axis, the subject of each end
+
+
+class Unsaid(Exception):
+    """What a scene-dependent phrase cannot mean in this scene: the reason and the phrase."""
+
+    def __init__(self, reason: str, phrase: str = "") -> None:
+        super().__init__(reason)
+        self.reason, self.phrase = reason, phrase
+
+
+def host(state: State, k: int) -> int | str | None:
+    """What slot k rests on at the start: another object, "table", or None (held, gone)."""
+    for o in sorted(state.members):
+        if o != k and state.standing(o) and on(state, k, o):
+            return o
+    return "table" if on(state, k, "table") else None
+
+
+def bearing(state: State, k: int) -> list[int]:
+    """The objects resting on slot k at the start."""
+    return [o for o in sorted(state.members) if o != k and state.standing(o) and on(state, o, k)]
+
+
+def turned(state: State, k: int, angle: int, name: str) -> str:
+    """The lie (across or lengthwise) a turn of `angle` degrees gives the block k."""
+    if angle % 90:
+        raise Unsaid(
+            f"a turn of {angle} degrees leaves {name!r} neither across nor lengthwise, the two ways "
+            "a goal can ask it to lie",
+            name,
+        )
+    if across(state, k):
+        start = "across"
+    elif lengthwise(state, k):
+        start = "lengthwise"
+    else:
+        raise Unsaid(
+            f"{name!r} lies neither across nor lengthwise at the start: say which way it should lie", name
+        )
+    quarter = (angle // 90) % 2 == 1
+    return {"across": "lengthwise", "lengthwise": "across"}[start] if quarter else start
+
+
+def between(state: State, ends: list[int], words: str) -> list[tuple[str, int]]:
+    """The clauses (relation, other) that put an object between the two objects `ends`: on the
+    axis along which they stand further apart."""
+    if len(ends) != 2:
+        raise Unsaid(f"'between {words}' needs two objects, not {len(ends)}", words)
+    a, b = ends
+    axis, toward_high, toward_low = max(SIDES, key=lambda s: abs(state.poses[a, s[0]] - state.poses[b, s[0]]))
+    if abs(state.poses[a, axis] - state.poses[b, axis]) <= 2 * WORDS.beside:
+        raise Unsaid(f"'between {words}': they stand too close together for anything to go between", words)
+    low, high = sorted(ends, key=lambda k: state.poses[k, axis])
+    return [(toward_high, low), (toward_low, high)]
+
+
+def swapped(state: State, k: int, partner: int, names: tuple[str, str]) -> tuple[str, int | str]:
+    """The clause (relation, other) that puts k where `partner` is at the start."""
+    mine, theirs = host(state, k), host(state, partner)
+    if mine != theirs and None not in (mine, theirs) and state.kind(k) in ("cup", "ball"):
+        return "on", theirs
+    for axis, toward_high, toward_low in SIDES:
+        gap = state.poses[partner, axis] - state.poses[k, axis]
+        if abs(gap) > WORDS.beside:
+            return (toward_high if gap > 0 else toward_low), partner
+    raise Unsaid(f"{names[0]!r} and {names[1]!r} stand too close together to swap", names[0])
+
+
+def other_than(noun: Noun, fits: list[int], said: set[int], subject: int | None, state: State) -> list[int]:
+    """For "the other support": those of `fits` not said before in the sentence, not the subject,
+    and not what the subject rests on or bears at the start; refused where that leaves out
+    none (the scene has no other)."""
+    near = set() if subject is None else {subject, *bearing(state, subject)}
+    if subject is not None and isinstance(host(state, subject), int):
+        near.add(host(state, subject))  # type: ignore[arg-type]
+    kept = [k for k in fits if k not in said | near]
+    if len(kept) == len(fits):
+        raise Unsaid(
+            f"{noun.words!r}: nothing said before it is one of them, so there is no other", noun.words
+        )
+    return kept
+
+
+def where(noun: Noun, subject: int, state: State, resolved: list[int]) -> int | str:
+    """The other argument of "where B was": what B rests on at the start."""
+    if len(resolved) != 1:
+        raise Unsaid(f"{noun.words!r}: where one object is, not {len(resolved)}", noun.words)
+    (b,) = resolved
+    place = host(state, b)
+    if place is None:
+        raise Unsaid(f"{noun.words!r}: it rests on nothing at the start", noun.words)
+    if place == subject:
+        raise Unsaid(f"{noun.words!r} is on the object to be put there", noun.words)
+    return place
+
+
+def other_end(state: State, k: int, name: str) -> str:
+    """For "the other end of the block": the end k does not rest on at the start."""
+    for side, other in (("left", "right"), ("right", "left")):
+        if on_end(state, k, side):
+            return other
+    raise Unsaid(
+        f"{name!r} rests on neither end of the block at the start, so 'the other end' is neither", name
+    )
+
+
+def bearing_of(state: State, k: int) -> list[int]:
+    """What slot k rests on at the start, as a list (empty: the table, or nothing)."""
+    place = host(state, k)
+    return [place] if isinstance(place, int) else []

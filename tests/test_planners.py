@@ -227,3 +227,26 @@ def test_closed_loop_oracle_plans_acts_and_stops_on_an_empty_plan(scene):
 def test_closed_loop_refuses_the_symbolic_planner_in_one_line():
     r = afford("plan", "--task", str(PAPER / "10-hide.json"), "--planner", "symbolic", "--closed-loop")
     assert r.returncode == 2 and "no world model" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_every_planner_name_has_one_record_and_the_command_line_takes_its_names_from_it():
+    from afford.cli.main import build_parser
+    from afford.cli.options import planners, planners_help
+    from afford.planning.run import CLOSED_LOOP, NETS, PLANNER_REGISTRY, PLANNERS, USES_NETS, Planner
+
+    assert PLANNERS == tuple(PLANNER_REGISTRY) and len(set(PLANNERS)) == len(PLANNERS)
+    for name, record in PLANNER_REGISTRY.items():
+        assert isinstance(record, Planner) and record.about, name
+        assert set(record.needs) <= set(NETS), name
+        # what the registry's derived lists say agrees with the record
+        assert (name in CLOSED_LOOP) == (record.closed_loop is not None), name
+        assert (name in USES_NETS) == bool({"recognition", "prediction", "members"} & set(record.needs)), name
+    # the planners that grow a learned world model are the ones that need nets
+    assert {"learned", "objects", "objects-true", "perceived-sim"} <= {
+        n for n, p in PLANNER_REGISTRY.items() if p.needs
+    }
+    for name in PLANNERS:  # `afford plan` takes every name, and no other
+        assert build_parser().parse_args(["plan", "--task", "t.json", "--planner", name]).planner == name
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["plan", "--task", "t.json", "--planner", "nope"])
+    assert planners("all") == PLANNERS and all(n in planners_help() for n in PLANNERS)

@@ -4,11 +4,6 @@ from __future__ import annotations
 
 from afford.cli.errors import CLIError
 
-PLANNERS_HELP = (
-    "one planner (oracle, symbolic, learned, hybrid, hybrid-oracle, ensemble, perceived-sim, objects, "
-    "hybrid-objects, objects-true), "
-    "several as a comma list, or all"
-)
 MAX_NODES_HELP = (
     "refuse to grow a tree past this many states, with the estimate, before growing the depth that "
     "would pass it (default 20,000; 0: no limit; the paper's tasks need at most ~700)"
@@ -94,6 +89,13 @@ def load_nets(weights: str | None):
         return load_learned(weights)
     except FileNotFoundError as e:
         raise CLIError(str(e)) from None
+
+
+def planners_help() -> str:
+    """--planner's help for the commands that take several: the registry's names."""
+    from afford.planning.run import PLANNERS
+
+    return f"one planner ({', '.join(PLANNERS)}), several as a comma list, or all"
 
 
 def planners(given: str) -> tuple[str, ...]:

@@ -10,7 +10,6 @@ from pathlib import Path
 
 from afford.cli.errors import CLIError
 from afford.cli.options import (
-    PLANNERS_HELP,
     add_objects_weights_argument,
     add_perturb_arguments,
     add_search_arguments,
@@ -22,6 +21,7 @@ from afford.cli.options import (
     objects_folder,
     output_folder,
     planner_config,
+    planners_help,
 )
 from afford.cli.options import perturbation as perturbation_of
 from afford.cli.options import planners as planner_names
@@ -330,7 +330,7 @@ def add_parsers(sub) -> None:
         description="Plan every task file in a folder with one planner, execute each plan, and print "
         "solved / plan / plan length / nodes / planning seconds per task.",
     )
-    bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
+    bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=planners_help())
     add_objects_weights_argument(bt)
     add_weights_argument(bt)
     bt.add_argument(
@@ -359,7 +359,7 @@ def add_parsers(sub) -> None:
     br.add_argument("--seed", type=int, default=0)
     br.add_argument("--max-steps", type=int, default=4)
     br.add_argument("--min-steps", type=int, default=1, help="fewest random executions a goal is made of")
-    br.add_argument("--planner", default="all", metavar="NAME[,NAME]|all", help=PLANNERS_HELP)
+    br.add_argument("--planner", default="all", metavar="NAME[,NAME]|all", help=planners_help())
     add_objects_weights_argument(br)
     add_weights_argument(br)
     br.add_argument(

@@ -31,7 +31,7 @@ from afford.planning.tree import Node, SearchConfig, edges
 from afford.sim.scene import Scene
 
 CAUSES = ("solved", "oracle fails", "execution", "recognition", "goal", "prediction")
-PLANNERS = ("learned", "objects")  # the planners with a learned world model to replay through
+PLANNERS = tuple(WORLD_MODELS)  # the planners with a learned world model to replay through
 
 
 @dataclass

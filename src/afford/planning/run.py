@@ -6,50 +6,35 @@ planned states (for pictures), the executed ones, and why a failure failed.
 
 from __future__ import annotations
 
-from functools import cache, partial
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from afford.errors import UserError
-from afford.planning.branches import BranchingModel
 from afford.planning.closed_loop import Loop, closed_loop
 from afford.planning.hybrid import PROPOSALS, plan_hybrid
 from afford.planning.judge import execute_plan
-from afford.planning.learned import LearnedModel
 from afford.planning.oracle import OracleModel
 from afford.planning.outcome import Outcome, PlannerConfig
-from afford.planning.strategies import search
+from afford.planning.searches import (
+    ensemble_search,
+    learned_model,
+    learned_search,
+    nets_or_shipped,
+    objects_model,
+    objects_search,
+    oracle_search,
+    perceived_sim_search,
+)
 from afford.planning.symbolic import plan_symbolic
 from afford.planning.symbolic_outcome import solve_symbolic
 from afford.planning.tasks import Task
-from afford.planning.tree import SearchResult
-from afford.planning.uncertain import EnsembleBranchingModel, EnsembleModel
+from afford.planning.tree import SearchResult, WorldModel
 from afford.sim.affordances import Affordance
 from afford.sim.perturb import Perturbation, piles, reset_perturbed
 from afford.sim.scene import Scene
-
-if TYPE_CHECKING:  # imported where used: the object nets load torch models
-    from afford.planning.objects_model import ObjectsModel
-
-# How the learned planners use a net that foresees several outcomes per step (PlannerConfig.outcomes):
-# carry on the likeliest, or keep them all as branches and score the expected eq. (5).
-# (image, learned nets, config) -> the world model; "expected" takes the planner's risk.
-OUTCOME_MODELS = {
-    "likeliest": lambda image, nets, config: LearnedModel(image, nets.recognizer, nets.predictor),
-    "expected": lambda image, nets, config: BranchingModel(
-        image, nets.recognizer, nets.predictor, config.risk
-    ),
-}
-
-# The same for the ensemble planner: each member carries on its likeliest outcome, or keeps
-# every outcome as a branch. (image, learned nets, config) -> the world model.
-ENSEMBLE_MODELS = {
-    "likeliest": lambda image, nets, config: EnsembleModel(image, nets.recognizer, nets.members, config.risk),
-    "expected": lambda image, nets, config: EnsembleBranchingModel(
-        image, nets.recognizer, nets.members, config.risk
-    ),
-}
 
 
 def solve(
@@ -62,149 +47,7 @@ def solve(
     config = config or PlannerConfig()
     if config.closed_loop:
         return _solve_closed_loop(task, planner, scene, config, learned)
-    return PLANNER_REGISTRY[planner](task, scene, config, learned)
-
-
-def _oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    scene.reset(task.scene)
-    return _judge(task, "oracle", _oracle_search(task, scene, config, None, task.max_steps), scene)
-
-
-def _nets(learned):
-    """The `LearnedNets` given, or the weights shipped in the package."""
-    if learned is None:
-        from afford.shipped import load_learned
-
-        return load_learned()
-    return learned
-
-
-def _learned_model(image: np.ndarray, learned, config: PlannerConfig) -> LearnedModel:
-    """The learned world model from a start image, keeping the outcomes as `config` asks."""
-    return _outcome_model(OUTCOME_MODELS, image, learned, config)
-
-
-def _outcome_model(models: dict, image: np.ndarray, learned, config: PlannerConfig):
-    if config.outcomes not in models:
-        raise UserError(f"outcomes: one of {', '.join(models)}, not {config.outcomes!r}")
-    return models[config.outcomes](image, learned, config)
-
-
-def _learned(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    scene.reset(task.scene)
-    result = _learned_search(task, scene, config, _nets(learned), task.max_steps)
-    return _judge(task, "learned", result, scene)
-
-
-def _learned_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
-    """The learned planner's search from what the camera sees now."""
-    model = _learned_model(scene.observe(), learned, config)
-    result = search(model, task.goal, steps, config.search)
-    if config.optimise_turns:
-        from afford.planning.angles import with_optimised_turns
-
-        result = with_optimised_turns(result, model, task.goal)
-    return result
-
-
-def _ensemble_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
-    model = _outcome_model(ENSEMBLE_MODELS, scene.observe(), learned, config)
-    return search(model, task.goal, steps, config.search)
-
-
-def _oracle_search(task: Task, scene: Scene, config: PlannerConfig, learned, steps: int) -> SearchResult:
-    return search(OracleModel(scene), task.goal, steps, config.search)
-
-
-_SIMULATOR: list[Scene] = []  # the second simulator the perceived-sim planner builds its states in
-
-
-def _perceived_sim_search(
-    task: Task, scene: Scene, config: PlannerConfig, learned, steps: int
-) -> SearchResult:
-    """The oracle's search over a simulator scene built from the objects perceived in what the
-    camera sees now (objects/simulated.py): what planning loses to perception alone."""
-    from afford.planning.perceived_sim import PerceivedSimModel
-    from afford.shipped import load_object_perception
-
-    if not _SIMULATOR:
-        _SIMULATOR.append(Scene())
-    perception = load_object_perception(config.objects_weights, fallback=True)
-    model = PerceivedSimModel(scene.observe(), perception, _SIMULATOR[0])
-    return search(model, task.goal, steps, config.search)
-
-
-_DRAWER: list = []  # the simulator the objects planner draws its states with
-
-
-@cache
-def _object_nets(folder: str | None) -> tuple:
-    """The object perception and dynamics nets of a weights folder, each the shipped one where
-    the folder lacks it; loaded once, since a closed loop builds its world model every round."""
-    from afford.shipped import load_object_dynamics, load_object_perception
-
-    return load_object_perception(folder, fallback=True), load_object_dynamics(folder, fallback=True)
-
-
-def _objects_model(image: np.ndarray, config: PlannerConfig, learned, start=None) -> ObjectsModel:
-    """The object world model on `image`: its likeliest outcome carried on, or every outcome a
-    branch (PlannerConfig.outcomes); from the perceived objects, or from `start` (TrueStart)."""
-    from afford.objects.draw import Drawer
-    from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
-
-    if not _DRAWER:
-        _DRAWER.append(Drawer())
-    perception, dynamics = _object_nets(config.objects_weights)
-    parts = (image, _nets(learned).recognizer, perception, dynamics, _DRAWER[0])
-    if config.outcomes == "expected":
-        return ObjectsBranchingModel(*parts, risk=config.risk, start=start)
-    return ObjectsModel(*parts, start=start)
-
-
-def _objects_search(
-    task: Task, scene: Scene, config: PlannerConfig, learned, steps: int, start=None
-) -> SearchResult:
-    """The paper's search with the object world model: objects perceived (or `start`), moved
-    and drawn."""
-    model = _objects_model(scene.observe(), config, learned, start)
-    result = search(model, task.goal, steps, config.search)
-    if config.optimise_turns:  # the angle is the dynamics' input: searched, not descended
-        from afford.planning.angles import with_searched_turns
-
-        result = with_searched_turns(result, model, task.goal)
-    return result
-
-
-def _objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    scene.reset(task.scene)
-    return _judge(task, "objects", _objects_search(task, scene, config, learned, task.max_steps), scene)
-
-
-def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    """The object world model's search started from the true objects, not the perceived ones."""
-    from afford.data.draws import pose_array
-    from afford.planning.objects_model import TrueStart
-
-    scene.reset(task.scene)  # a task starts with the gripper empty
-    start = TrueStart(pose_array(scene), -1, scene.instance_mask())
-    return _judge(
-        task, "objects-true", _objects_search(task, scene, config, learned, task.max_steps, start), scene
-    )
-
-
-def _perceived_sim(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    scene.reset(task.scene)
-    return _judge(
-        task, "perceived-sim", _perceived_sim_search(task, scene, config, None, task.max_steps), scene
-    )
-
-
-def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    scene.reset(task.scene)
-    result = _ensemble_search(task, scene, config, _nets(learned), task.max_steps)
-    outcome = _judge(task, "ensemble", result, scene)
-    outcome.spread = result.nodes[result.best].spread
-    return outcome
+    return PLANNER_REGISTRY[planner].solve(task, scene, config, learned)
 
 
 def execute_perturbed(
@@ -223,7 +66,7 @@ def execute_perturbed(
     is after every step."""
     if config is not None and config.closed_loop:
         base = piles(scene, task.scene)
-        nets = _nets(learned) if outcome.planner in USES_NETS else None
+        nets = _learned_for(PLANNER_REGISTRY[outcome.planner].needs, learned)
         outcome.perturbed = []
         for k in range(executions):
             draw = np.random.default_rng([seed, k])  # the same draws as the open-loop executions
@@ -254,29 +97,6 @@ def _symbolic(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outco
     return solve_symbolic(task, scene)
 
 
-def _hybrid(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    return _solve_hybrid(task, "hybrid", scene, config, _nets(learned))
-
-
-def _hybrid_oracle(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    return _solve_hybrid(task, "hybrid-oracle", scene, config, None)
-
-
-def _hybrid_objects(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    return _solve_hybrid(task, "hybrid-objects", scene, config, _nets(learned))
-
-
-# The world models a plan can be checked or replayed with (hybrid planners, `diagnose.py`):
-# (scene, image seen, config, learned nets) -> WorldModel.
-WORLD_MODELS = {
-    "learned": lambda scene, image, config, learned: _learned_model(image, learned, config),
-    "oracle": lambda scene, image, config, learned: OracleModel(scene),
-    "objects": lambda scene, image, config, learned: _objects_model(image, config, learned),
-}
-# Each hybrid planner's world model, which checks the canonical plans.
-HYBRID_MODELS = {"hybrid": "learned", "hybrid-oracle": "oracle", "hybrid-objects": "objects"}
-
-
 class ClosedLoopError(UserError):
     """A planner that cannot re-plan from what it sees."""
 
@@ -288,7 +108,7 @@ def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerCo
             f"the {planner} planner has no world model to plan again from what it sees; "
             f"closed loop takes {', '.join(CLOSED_LOOP)}"
         )
-    learned = _nets(learned) if planner in USES_NETS else None
+    learned = _learned_for(PLANNER_REGISTRY[planner].needs, learned)
     loop, success = _closed_loop_run(task, planner, scene, config, learned, lambda: scene.reset(task.scene))
     reason = "" if success else f"the success predicate ({task.success.describe()}) is false after the loop"
     last = loop.last.loss if loop.last is not None else (loop.steps[-1].search.loss if loop.steps else None)
@@ -314,7 +134,7 @@ def _closed_loop_run(
 ) -> tuple[Loop, bool]:
     """One loop from the state `start()` puts the scene in: the loop, and whether the task's
     check holds after it."""
-    plan_from = CLOSED_LOOP[planner](task, scene, config, learned)
+    plan_from = PLANNER_REGISTRY[planner].closed_loop(task, scene, config, learned)
     start()
     loop = closed_loop(scene, plan_from, task.max_steps)
     return loop, bool(task.success.holds(scene))
@@ -330,11 +150,10 @@ def _searcher(plan):
     return make
 
 
-def _hybrid_rounds(planner: str):
+def _hybrid_rounds(make_model: Callable):
     """Closed-loop hybrid: the canonical proposals are made once, from the task's start; each
-    round the planner's world model checks, from the observed state, the rest of every
-    proposal that began with the actions taken so far, and searches when it keeps none."""
-    make_model = WORLD_MODELS[HYBRID_MODELS[planner]]
+    round the world model checks, from the observed state, the rest of every proposal that
+    began with the actions taken so far, and searches when it keeps none."""
 
     def rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
         proposals = plan_symbolic(
@@ -359,14 +178,16 @@ def _hybrid_rounds(planner: str):
     return rounds
 
 
-def _solve_hybrid(task: Task, name: str, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-    """Canonical proposals checked by the planner's world model (HYBRID_MODELS), built on the
-    scene reset to the task's start; search as the fallback (`hybrid.py`)."""
+def _solve_hybrid(
+    task: Task, name: str, make_model: Callable, scene: Scene, config: PlannerConfig, learned
+) -> Outcome:
+    """Canonical proposals checked by a world model (`make_model`), built on the scene reset
+    to the task's start; search as the fallback (`hybrid.py`)."""
     proposals = plan_symbolic(
         scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
     )
     scene.reset(task.scene)
-    model = WORLD_MODELS[HYBRID_MODELS[name]](scene, scene.observe(), config, learned)
+    model = make_model(scene, scene.observe(), config, learned)
     hybrid = plan_hybrid(model, task.goal, proposals.plans, task.max_steps, config.search, config.accept)
     outcome = _judge(task, name, hybrid.search, scene, source=hybrid.source)
     outcome.seconds += proposals.seconds
@@ -402,31 +223,141 @@ def _judge(task: Task, name: str, result: SearchResult, scene: Scene, source: st
     )
 
 
-# Each planner: (task, scene, search config, learned nets or None) -> Outcome.
-PLANNER_REGISTRY = {
-    "oracle": _oracle,
-    "symbolic": _symbolic,
-    "learned": _learned,
-    "hybrid": _hybrid,  # canonical proposals checked by the learned nets (paper V)
-    "hybrid-oracle": _hybrid_oracle,  # the same, checked by the simulator
-    "ensemble": _ensemble,  # the learned planner on an ensemble of prediction nets, risk-averse (paper V)
-    "perceived-sim": _perceived_sim,  # the simulator run from perceived objects (objects/simulated.py)
-    "objects": _objects,  # the object world model: objects perceived, moved by learned dynamics, drawn
-    "hybrid-objects": _hybrid_objects,  # canonical proposals checked by the object world model
-    "objects-true": _objects_true,  # the object world model from the true objects: what perception costs
+# A world model a plan can be checked or replayed with (hybrid planners, `diagnose.py`):
+# (scene, image seen, config, learned nets) -> WorldModel.
+WorldModelMaker = Callable[[Scene, np.ndarray, PlannerConfig, object], WorldModel]
+# A planner's closed-loop round maker: (task, scene, config, learned nets or None) ->
+# plan_from(steps left) -> SearchResult, planning from the scene as it is (`closed_loop`).
+RoundMaker = Callable[[Task, Scene, PlannerConfig, object], Callable[[int], SearchResult]]
+
+
+@dataclass(frozen=True)
+class Planner:
+    """One planner: how it plans and is judged (`solve`: (task, scene, config, learned nets or
+    None) -> Outcome), the nets it needs (`shipped.LearnedNets`' and the object nets, by
+    name: none for the simulator's and the canonical planners), how it plans again from an
+    observed state (`closed_loop`; None: it cannot), and the world model it grows, for the
+    hybrid planner built on it and `diagnose` (`world_model`; None: none to replay through)."""
+
+    solve: Callable[[Task, Scene, PlannerConfig, object], Outcome]
+    about: str
+    needs: tuple[str, ...] = ()
+    closed_loop: RoundMaker | None = None
+    world_model: WorldModelMaker | None = None
+
+
+# Every net a planner may need, by the name `Planner.needs` gives it; the first three are
+# `shipped.LearnedNets`', the others the object world model's (PlannerConfig.objects_weights).
+NETS = ("recognition", "prediction", "members", "perception", "dynamics")
+LEARNED_NETS = NETS[:3]
+
+
+def _learned_for(needs: tuple[str, ...], learned):
+    """The learned nets a planner with these needs plans with (None: it needs none of them)."""
+    return nets_or_shipped(learned) if set(needs) & set(LEARNED_NETS) else None
+
+
+def _searching(name: str, plan_search, needs: tuple[str, ...], about: str, world_model=None) -> Planner:
+    """A planner that searches a tree from the task's start (`plan_search(task, scene, config,
+    learned, steps)`), executed open loop and judged; in closed loop, the same search from
+    each observed state."""
+
+    def solve_it(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+        scene.reset(task.scene)
+        result = plan_search(task, scene, config, _learned_for(needs, learned), task.max_steps)
+        return _judge(task, name, result, scene)
+
+    return Planner(solve_it, about, needs, _searcher(plan_search), world_model)
+
+
+def _hybrid(name: str, base: Planner, about: str) -> Planner:
+    """Canonical proposals checked by `base`'s world model (paper V), in closed loop too."""
+
+    def solve_it(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+        return _solve_hybrid(task, name, base.world_model, scene, config, _learned_for(base.needs, learned))
+
+    return Planner(solve_it, about, base.needs, _hybrid_rounds(base.world_model))
+
+
+def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    scene.reset(task.scene)
+    result = ensemble_search(task, scene, config, nets_or_shipped(learned), task.max_steps)
+    outcome = _judge(task, "ensemble", result, scene)
+    outcome.spread = result.nodes[result.best].spread
+    return outcome
+
+
+def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    """The object world model's search started from the true objects, not the perceived ones."""
+    from afford.data.draws import pose_array
+    from afford.planning.objects_model import TrueStart
+
+    scene.reset(task.scene)  # a task starts with the gripper empty
+    start = TrueStart(pose_array(scene), -1, scene.instance_mask())
+    return _judge(
+        task,
+        "objects-true",
+        objects_search(task, scene, config, nets_or_shipped(learned), task.max_steps, start),
+        scene,
+    )
+
+
+_LEARNED = _searching(
+    "learned",
+    learned_search,
+    ("recognition", "prediction"),
+    "the paper's: affordances recognised in the EM*D net's predicted futures",
+    lambda scene, image, config, learned: learned_model(image, learned, config),
+)
+_ORACLE = _searching(
+    "oracle",
+    oracle_search,
+    (),
+    "the paper's search with the simulator as its world model",
+    lambda scene, image, config, learned: OracleModel(scene),
+)
+_OBJECTS = _searching(
+    "objects",
+    objects_search,
+    ("recognition", "perception", "dynamics"),
+    "the object world model: objects perceived, moved by learned dynamics, drawn",
+    lambda scene, image, config, learned: objects_model(image, config, learned),
+)
+
+# Every planner, one record each; `afford plan`, `afford bench` and the pictures take their
+# names from here.
+PLANNER_REGISTRY: dict[str, Planner] = {
+    "oracle": _ORACLE,
+    "symbolic": Planner(_symbolic, "canonical effects only: the baseline"),
+    "learned": _LEARNED,
+    "hybrid": _hybrid("hybrid", _LEARNED, "canonical proposals checked by the learned nets (paper V)"),
+    "hybrid-oracle": _hybrid("hybrid-oracle", _ORACLE, "canonical proposals checked by the simulator"),
+    "ensemble": Planner(
+        _ensemble,
+        "the learned planner on an ensemble of prediction nets, risk-averse (paper V)",
+        ("recognition", "members"),
+        _searcher(ensemble_search),
+    ),
+    "perceived-sim": _searching(
+        "perceived-sim",
+        perceived_sim_search,
+        ("perception",),
+        "the simulator run from the objects perception sees: what planning loses to perception alone",
+    ),
+    "objects": _OBJECTS,
+    "hybrid-objects": _hybrid(
+        "hybrid-objects", _OBJECTS, "canonical proposals checked by the object world model"
+    ),
+    "objects-true": Planner(
+        _objects_true,
+        "the object world model from the true objects: what perception costs",
+        ("recognition", "perception", "dynamics"),
+    ),
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
-# Each planner that can plan again from an observed state: (task, scene, config, learned nets
-# or None) -> plan_from(steps left) -> SearchResult, for `closed_loop`.
-CLOSED_LOOP = {
-    "oracle": _searcher(_oracle_search),
-    "learned": _searcher(_learned_search),
-    "hybrid": _hybrid_rounds("hybrid"),
-    "hybrid-oracle": _hybrid_rounds("hybrid-oracle"),
-    "ensemble": _searcher(_ensemble_search),
-    "perceived-sim": _searcher(_perceived_sim_search),
-    "objects": _searcher(_objects_search),
-    "hybrid-objects": _hybrid_rounds("hybrid-objects"),
-}
-# The planners that load the trained nets.
-USES_NETS = ("learned", "hybrid", "ensemble", "objects", "hybrid-objects", "objects-true")
+# The planners that can plan again from an observed state (`--closed-loop`).
+CLOSED_LOOP = tuple(name for name, p in PLANNER_REGISTRY.items() if p.closed_loop is not None)
+# The planners that load the learned nets (`shipped.LearnedNets`).
+USES_NETS = tuple(name for name, p in PLANNER_REGISTRY.items() if set(p.needs) & set(LEARNED_NETS))
+# The planners with a world model to replay a plan through (`diagnose`): those that learn it.
+WORLD_MODELS = {name: p.world_model for name, p in PLANNER_REGISTRY.items() if p.world_model and p.needs}

@@ -26,8 +26,9 @@ from lark.visitors import CollapseAmbiguities
 from afford.words.parses import Build, Item
 
 GRAMMAR = r"""
-start: _item (_join _later)*
-_join: "and" | "," | "," "and" | _then | "and" _then | "," _then | "," "and" _then | "but" | "," "but"
+start: _item (_join _later | _but _item)*
+_join: "and" | "," | "," "and" | _then | "and" _then | "," _then | "," "and" _then
+_but: "but" | "," "but"
 _then: "then" | "after" "that" | "afterwards" | "next" | "finally" | "and" "finally"
 _later: _item | ditto
 ditto: dnp ("and" dnp)? _after?
@@ -40,11 +41,12 @@ dnp: _the _mods noun                -> one
 
 _item: state _after? | command | _lead state _after? | purpose
 purpose: command _so_that state _after?
+       | _polite* _put nps _so_that state _after?      -> purpose_only
 _so_that: "so" | "so" "that" | "," "so" | "," "so" "that" | "such" "that" | "in" "order" "that"
         | "until"
 _after: "any" "more" | "anymore" | "any" "longer" | "afterwards" | "in" "the" "end" | "at" "the" "end"
       | "again"
-_lead: "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "that" | "see" "that"
+_lead: "first" | "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "that" | "see" "that"
      | "i" "want" | "i" "want" "that" | "i" "would" "like" | "i" "need" | "i" "expect"
      | "the" "goal" "is" | "the" "goal" "is" "that" | "make" "it" "so" "that" | "i" "would" "like" "it" "if"
      | "i" "want" "to" "see" | "i" "would" "like" "to" "see" | "let" "'s" "make" "sure"
@@ -128,7 +130,7 @@ comp: _on table                      -> on_table
     | _lengthwise                    -> lengthwise
     | "not" comp                     -> not_
     | "no" "longer" comp             -> no_longer
-    | "between" nps                  -> between
+    | "in"? "between" nps            -> between
     | _under nps                     -> gone
     | "where" np _was                -> where
     | _turned angle                  -> turned
@@ -171,7 +173,8 @@ _tipped: "tipped" "over" | "tipped" | "knocked" "over" | "knocked" "down" | "top
 _held: "held" | "in" "the" "gripper" | "in" "the" "robot" "'s" "hand" | "in" "the" "robot" "'s" "gripper"
      | "in" "the" "hand" | "in" "hand" | "picked" "up" | "being" "held" | "gripped" | "grasped"
      | "lifted" | "lifted" "up" | "in" "its" "gripper" | "in" "the" "air" | "carried"
-_across: "across" | "turned" "across" | "lying" "across" | "left" "to" "right" | "crosswise" | "crossways"
+_across: "across" | "across" "the" "table" | "turned" "across" | "lying" "across" | "left" "to" "right"
+       | "crosswise" | "crossways"
        | "from" "left" "to" "right" | "side" "to" "side"
 _lengthwise: "lengthwise" | "lengthways" | "turned" "lengthwise" | "lying" "lengthwise" | "front" "to" "back"
            | "away" "from" _viewer | "pointing" "away" "from" _viewer | "pointing" "away" | "towards" _viewer
@@ -185,10 +188,21 @@ vstate: _vanish                           -> gone
 _toppling: _fall_verb "over" | _fall_verb "down" | "topple" | "topple" "over" | "tip" "over" | "tip" | "fall"
 _fall_off: _fall_verb "off" | _fall_verb "off" "of"
 _vanish: "disappear" | "vanish" | "go" "away" | "go" "missing" | "leave" "the" "table"
+// the same, said after "keep the cup from"
+ving: _tipping                      -> tipped
+    | _fall_ing "off" table          -> off_table
+    | _fall_ing "off" nps            -> off
+    | _vanishing                     -> gone
+_tipping: _fall_ing "over" | _fall_ing "down" | "toppling" | "toppling" "over" | "tipping" "over" | "tipping"
+        | "being" "knocked" "over" | "getting" "knocked" "over"
+_vanishing: "disappearing" | "vanishing"
+_fall_ing: "falling" | "rolling" | "dropping" | "slipping" | "sliding" | "tumbling"
+_keep: "keep" | "stop" | "prevent"
 _fall_verb: "fall" | "roll" | "drop" | "slip" | "slide" | "tumble" | "get" "knocked" | "be" "knocked"
 
 // ------------------------------------------------------------------ instructions
 command: _polite* action _tail?                        -> do
+       | _polite* _keep nps "from" ving _tail?         -> keep_from
        | _polite* _dont action _tail?                  -> dont
        | _polite* action ","? "without" ing _tail?     -> without
 _polite: _courtesy ","?
@@ -238,7 +252,7 @@ _hide_at: _under | "behind"
 _put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "carry" | "slide" | "push"
     | "balance" | "transfer" | "shift" | "relocate" | "return" | "deposit" | "park" | "plop" | "plonk"
     | "raise" | "send" | "bump" | "tap" | "poke" | "hit" | "dump" | "perch" | "settle" | "let" | "center"
-    | "centre" | "arrange" | "line" | "stick" | "land"
+    | "centre" | "arrange" | "line" | "stick" | "land" | "clear"
     | "shove" | "roll" | "throw" | "toss" | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
     | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
     | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
@@ -249,7 +263,7 @@ _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect"
 _give: "hand" | "give" | "bring" | "pass" | "fetch"
 _tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
 _topple: "topple" | "upset" | "overturn"
-_rid: "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
+_rid: "remove" | "clear" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
 _tip_ing: "knocking" | "tipping" | "pushing" | "turning"
 _push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
 
@@ -269,7 +283,8 @@ np: det _mods noun _posts                -> np_one
   | "they"                               -> them
   | "everything"                         -> everything
 // the determiner says how many the noun names (`parses.DETERMINERS`)
-!det: "the" | "this" | "that" | "my" | "a" | "an" | "one" "of" "the" | "any" | "every" | "each" | "all"
+!det: "neither" | "either" | "the" | "this" | "that" | "my" | "a" | "an" | "one" "of" "the" | "any" | "every"
+    | "each" | "all"
     | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the" | "both" | "both" "the"
     | "both" "of" "the" | "the" number | "all" number | number | "no" | "none" "of" "the" | "the" "other"
     | "the" "other" number
@@ -282,8 +297,9 @@ _both: "both" | "both" "the" | "both" "of" "the"
 _mods: (mod | bare)*
 bare: "empty" | "free" | "bare" | "unoccupied" | "vacant"
 !mod: "blue" | "red" | "black" | "yellow" | "left" | "right" | "middle" | "centre" | "center" | "leftmost"
-    | "rightmost" | "first" | "second" | "third" | "last" | "front" | "back" | "rear" | "near" | "far"
-    | "nearest" | "farthest" | "furthest" | "closest" | "left" "hand" | "right" "hand" | "central"
+    | "rightmost" | "first" | "second" | "third" | "fourth" | "last" | "front" | "back" | "rear" | "near"
+    | "far" | "nearest" | "farthest" | "furthest" | "closest" | "left" "hand" | "right" "hand" | "central"
+    | "outer" | "outside" | "outermost"
     | "nearer" | "closer" | "farther" | "further"
 !noun: "cup" | "mug" | "ball" | "sphere" | "support" | "pillar" | "pedestal" | "block" | "brick" | "plank"
      | "beam" | "bar" | "board" | "slab" | "post" | "stand" | "column" | "pole" | "cylinder" | "glass"
@@ -300,11 +316,13 @@ _posts: post*
     | _on table                          -> on_table
     | _that head complements             -> that
     | _near np                           -> nearest
-    | _closest _viewer                   -> viewer_near
-    | _farthest _viewer                  -> viewer_far
+    | (_that "is")? _closest _viewer     -> viewer_near
+    | (_that "is")? _farthest _viewer    -> viewer_far
     | _except nps                        -> except_
     | _that? np _rests_on                -> bears
-    | "with" np ("on" "it" | "on" "top" | "on" "top" "of" "it")          -> bears
+    | "with" np ("on" "it" | "on" "top" | "on" "top" "of" "it")?         -> bears
+    | _that? _bearing np ("on" "it" | "on" "top")?                      -> bears
+    | _under np                          -> bears
     | "from" np                          -> on
     | place
     | "from" "the" side                  -> counted_from
@@ -312,7 +330,10 @@ _that: "that" | "which"
 _closest: "nearest" | "nearest" "to" | "closest" "to" | "nearer" "to" | "closer" "to" | "next" "to"
 _farthest: "farthest" "from" | "furthest" "from" | "farther" "from" | "further" "from" | "far" "from"
          | "away" "from"
-_except: "except" | "except" "for" | "other" "than" | "apart" "from" | "besides" | "save" | "excluding"
+_bearing: "has" | "holds" | "carries" | "supports" | "holding" | "carrying" | "supporting" | "bearing"
+        | "having"
+_except: "but" | "except" | "except" "for" | "other" "than" | "apart" "from" | "besides" | "save"
+       | "excluding"
 _rests_on: _rest_verb "on" | _rest_verb "on" "top" "of" | _rest_verb "upon"
 _rest_verb: "is" | "was" | "sits" | "sat" | "rests" | "stands" | "lies" | "is" "sitting" | "is" "resting"
           | "is" "standing" | "is" "lying"
@@ -399,18 +420,45 @@ def _alternatives(body: str) -> list[str]:
     return [*alts, current]
 
 
-def classed(grammar: str) -> tuple[str, dict[str, frozenset[str]]]:
-    """The grammar with each rule's alternatives that differ only in their first word (three
-    one-word alternatives or more, or two longer ones) made one: that word a word class, a
-    terminal of its own, and the words of each class. Earley predicts every alternative of a
-    rule it expects: a verb class of 50 words is 50 items at every place a verb may start, and
-    one terminal is one item (a parse takes less than half the time)."""
+def _definitions(grammar: str) -> list[list[str]]:
+    """The grammar's lines, grouped by the rule each defines (a line of its own otherwise)."""
     definitions: list[list[str]] = []
     for line in grammar.split("\n"):
         if _RULE.match(line) or not definitions or not line.startswith(" ") or not line.strip():
             definitions.append([line])
         else:
             definitions[-1].append(line)
+    return definitions
+
+
+# The rules whose words make a goal a sentence rather than a phrase (a suggestion holds one).
+VERB_RULES = (
+    "_holds", "_be", "_have", "_be_base", "_verb", "_verb_base", "_stand", "_modal", "_do", "_keep",
+    "_putdown", "_make", "_turn", "_swap", "_hide", "_put", "_stand_verb", "_take", "_give", "_tip",
+    "_topple", "_rid",
+)  # fmt: skip
+
+
+@functools.cache
+def verbs() -> frozenset[str]:
+    """The first word of each alternative of VERB_RULES, and "pick" ("pick up")."""
+    found = {"pick"}
+    for lines in _definitions(GRAMMAR):
+        m = _RULE.match(lines[0])
+        if m is not None and m.group(1) in VERB_RULES:
+            for a in _alternatives(" ".join([m.group(2), *lines[1:]])):
+                w = _LEADING_WORD.match(a.split('" ')[0] + '"' if '" ' in a else a)
+                found |= {w.group(1)} if w else set()
+    return frozenset(found - {"both", "all"})
+
+
+def classed(grammar: str) -> tuple[str, dict[str, frozenset[str]]]:
+    """The grammar with each rule's alternatives that differ only in their first word (three
+    one-word alternatives or more, or two longer ones) made one: that word a word class, a
+    terminal of its own, and the words of each class. Earley predicts every alternative of a
+    rule it expects: a verb class of 50 words is 50 items at every place a verb may start, and
+    one terminal is one item (a parse takes less than half the time)."""
+    definitions = _definitions(grammar)
     out: list[str] = []
     classes: dict[str, frozenset[str]] = {}
     for lines in definitions:

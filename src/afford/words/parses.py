@@ -48,6 +48,7 @@ ORDER = {
     "first": ("x", 0),
     "second": ("x", 1),
     "third": ("x", 2),
+    "fourth": ("x", 3),
     "right": ("x", -1),
     "rightmost": ("x", -1),
     "last": ("x", -1),
@@ -68,6 +69,9 @@ ORDER = {
     "furthest": ("y", -1),
     "farther": ("y", -1),
     "further": ("y", -1),
+    "outer": ("x", "ends"),
+    "outside": ("x", "ends"),
+    "outermost": ("x", "ends"),
 }
 PLACES = {  # "the cup on the left": an order word said after the noun
     "left": "left",
@@ -97,7 +101,8 @@ DETERMINERS = {
     **dict.fromkeys(("every", "each"), ("every", "every")),
     **dict.fromkeys(("all", "all the", "all of the", "each of the", "any of the"), ("every", "every")),
     **dict.fromkeys(("both", "both the", "both of the"), ("both", "both")),
-    **dict.fromkeys(("no", "none of the"), ("none", "none")),
+    **dict.fromkeys(("no", "none of the", "neither"), ("none", "none")),
+    "either": ("every", "every"),
     "the other": ("one", "every"),
 }
 
@@ -364,6 +369,13 @@ class Build(Transformer):
     def dont(self, meta, c):
         subjects, preds = c[0]
         return Item(subjects, _negate(preds), instruction=True)
+
+    def keep_from(self, meta, c):
+        return Item(_nouns(c[0]), _negate(c[1]), instruction=True)
+
+    def purpose_only(self, meta, c):
+        # "move the ball so that it is behind the cup": the purpose is the whole goal
+        return (Item(_nouns(c[0]), (), instruction=True), c[1])
 
     def purpose(self, meta, c):
         # "turn the block so that it points away": the instruction and the state it is for

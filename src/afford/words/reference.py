@@ -240,6 +240,13 @@ def _in_order(noun: Noun, word: str, fits: list[int], state: State) -> list[int]
     the taught names are)."""
     axis, rank = ORDER[word]
     standing = [k for k in fits if state.standing(k)]
+    if rank == "ends":  # "the outer cups": the first and the last of three or more
+        if len(standing) < 3:
+            raise Unresolved(
+                f"{noun.words!r}: of {len(standing)} none is between the others", noun.words, _own(noun)
+            )
+        ends = sorted(standing, key=lambda k: state.poses[k, 0])
+        return [ends[0], ends[-1]]
     if len(standing) <= 1 and rank in (0, -1):
         return standing or fits  # "the left cup" of one cup: it
     column = 0 if axis == "x" else 1
@@ -317,6 +324,8 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
         subjects_said: list[int] = []
         others_said: list[int] = []
         known: dict[int, list[int]] = {}
+        if not preds:  # "move the ball so that ...": named, for "it", and nothing asked of it
+            subjects_said += [k for k, _ in _slots(item.subjects, tuple(PLURALS)[:4], state, context)]
         for pred in preds:
             relation = RELATIONS[STANDS_FOR.get(pred.relation, pred.relation)]
             subjects = _slots(item.subjects, relation.subjects, state, context, known=known)
@@ -332,14 +341,14 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
                         relation.subjects,
                     )
                 context.subject = s
-                context.mentioned[0:0] = [subjects_said, context.inner]
+                context.mentioned.insert(0, context.inner)
                 context.source = s if pred.source else None
                 try:
                     pairs = _pairs(pred, s, noun, subjects, state, context)
                 except derived.Unsaid as e:
                     raise Unresolved(e.reason, e.phrase) from None
                 finally:
-                    del context.mentioned[0:2]
+                    del context.mentioned[0]
                     context.source = None
                 for name, other in pairs:
                     if isinstance(other, int):

@@ -15,7 +15,7 @@ from afford.words import grammar
 from afford.words.facts import RELATIONS, State
 from afford.words.reference import names
 
-TRIES = 8  # sentences tried against the scene before falling back to the plain ones
+TRIES = 4  # sentences tried against the scene before falling back to the plain ones (each a parse)
 # Plain sentences per relation: {x} the subject, {y} the other object; a state, an instruction.
 PLAIN = {
     "on": ("{x} is on {y}", "put {x} on {y}"),
@@ -68,19 +68,29 @@ def nearest(
             " ".join(f if i in unknown else w for i, (w, f) in enumerate(zip(said, fixed, strict=True)))
         )
     if at is not None and at < len(said):
-        for w in difflib.get_close_matches(said[at], known, n=3, cutoff=0.6):
+        # an unknown word's nearest spelling is tried above already
+        n = 1 if at in unknown else 2
+        for w in difflib.get_close_matches(said[at], known, n=n, cutoff=0.6):
             tries.append(" ".join([*said[:at], w, *said[at + 1 :]]))
         tries.append(" ".join(said[:at] + said[at + 1 :]))
     if phrase and phrase in text:
         alike = difflib.SequenceMatcher(None, phrase)
         named = sorted(
-            {(state.kind(k) not in fits, v[0]) for k, v in names(state).items()},
+            {
+                (state.kind(k) not in fits, v[0])
+                for k, v in names(state).items()
+                if not fits or state.kind(k) in fits
+            },
             key=lambda fit_name: (fit_name[0], -_spelt_alike(alike, fit_name[1]), fit_name[1]),
         )
         # one object in the place of several ("both cups are ..."): the verb agrees with it
         tries += [text.replace(phrase, n, 1).replace(f"{n} are ", f"{n} is ") for _, n in named]
+    # a sentence stays one: a swapped or dropped word must not leave a phrase ("the ball gone
+    # on the block" reads as a verbless state, and no person writes it)
+    verbs = grammar.verbs()
+    sentence = any(w in verbs for w in said)
     for t in list(dict.fromkeys(" ".join(t.split()) for t in tries))[:TRIES]:
-        if t and t != text and reads(t):
+        if t and t != text and (not sentence or any(w in verbs for w in t.split())) and reads(t):
             return t
     plain = plain_sentences(state)
     plain.sort(key=lambda p: -likeness(p, text))

@@ -25,6 +25,7 @@ from afford.cli.options import (
 )
 from afford.cli.options import perturbation as perturbation_of
 from afford.cli.options import planners as planner_names
+from afford.cli.words import goal_reading, reading_line
 
 
 def _outcome_line(o) -> str:
@@ -39,13 +40,18 @@ def cmd_plan(args) -> int:
     from afford.planning.tasks import load_task, sentence_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
+    from afford.words.facts import State
 
     check_closed_loop(args, (args.planner,))
+    reading = None  # how a --goal sentence was read
     scene = Scene()
     if args.scene is not None:
         if not args.goal:
             raise CLIError("--scene needs --goal SENTENCE")
         task = sentence_task(args.scene, args.goal, args.steps, scene)
+        reading = goal_reading(args.goal, task.goal.statement, State.of_scene(scene))
+        if not args.json:
+            print(reading_line(reading), flush=True)
     else:
         if args.goal:
             raise CLIError("--goal goes with --scene; a task file holds its own goal")
@@ -60,7 +66,7 @@ def cmd_plan(args) -> int:
         execute_perturbed(outcome, task, scene, perturbation, args.executions, config=config, learned=learned)
     picture = out / f"{task.name}-{args.planner}.png"
     plan_strip(outcome, task.goal, picture)
-    record = outcome.to_dict() | {"picture": str(picture)}
+    record = outcome.to_dict() | {"picture": str(picture)} | ({"goal_read": reading} if reading else {})
     if args.report:
         from afford.viz.report import write_report
 

@@ -109,3 +109,25 @@ def add_eval_parser(esub) -> None:
     p.add_argument("--checkpoint", default="best.safetensors", help="file in RUN (default best.safetensors)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_eval_goals)
+
+
+def goal_reading(sentence: str, statement, state) -> dict:
+    """How `afford plan --goal` read its sentence, shown before it plans so that a misreading
+    is caught before the robot acts on it: each clause in words (as the agreement model is
+    given it, the objects by name) and as a fact ('[not] relation subject [other]')."""
+    from afford.words.sentences import written
+
+    facts = [_fact(c, state) for c in statement.clauses]
+    clauses = [written((c,), state) or f for c, f in zip(statement.clauses, facts, strict=True)]
+    return {"sentence": sentence, "clauses": clauses, "facts": facts}
+
+
+def reading_line(reading: dict) -> str:
+    return f"goal read as: {'; '.join(reading['clauses'])}"
+
+
+def _fact(clause, state) -> str:
+    f = clause.fact
+    other = state.slots[f.other] if isinstance(f.other, int) else f.other
+    said = ("not" if clause.negated else "", f.relation, state.slots[f.subject], other)
+    return " ".join(w for w in said if w)

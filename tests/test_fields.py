@@ -86,6 +86,15 @@ def test_a_stored_field_this_code_does_not_vary_loads_at_its_value_and_refuses_a
     for asks in ({"variance": True}, {"loss": {"nll": 1.0}}, {"choice_head": "grid"}, {"trained": "side"}):
         with pytest.raises(ValueError, match="does not hold"):
             from_dict(PredictionConfig, asks)
+    from afford.objects.dynamics import DynamicsConfig
+    from afford.objects.perception import PerceptionConfig
+
+    stored = {"arm_path": False, "mirror": False, "rare_weight": 1.0}
+    assert from_dict(DynamicsConfig, stored) == DynamicsConfig()
+    assert from_dict(PerceptionConfig, {"hidden": False, "edge_weight": 1.0}) == PerceptionConfig()
+    for cls, asks in ((DynamicsConfig, {"arm_path": True}), (PerceptionConfig, {"hidden": True})):
+        with pytest.raises(ValueError, match="does not hold"):
+            from_dict(cls, asks)
 
 
 def test_a_checkpoint_asking_for_a_removed_feature_is_a_one_line_error(tmp_path):

@@ -1,28 +1,64 @@
 """The grammar of goals: what a person may say to the robot, parsed with lark.
 
-A goal is one or more items joined by "and", commas or "then". An item is a state ("the cup is
-on the block", "both balls are gone", "the cup stands upright on the block"), an instruction
-("put the red ball on the block", "knock the cup over", "hand me the ball"), or a state
-after a lead-in ("make sure the cup is upright"). `read` gives every parse of a sentence as
-`Item`s whose noun phrases are not yet resolved: what they refer to depends on the scene
+A goal is one or more items joined by "and", commas, "but" or "then". An item is a state ("the
+cup is on the block", "both balls are gone", "the cup stands upright on the block"), an
+instruction ("put the red ball on the block", "knock the cup over", "hand me the ball"), or a
+state after a lead-in ("make sure the cup is upright"). `read` gives every parse of a sentence
+as `Item`s whose noun phrases are not yet resolved: what they refer to depends on the scene
 (`reference.py`), and so does which of two parses is meant.
 
-The grammar is written over whole words: a sentence is first normalised (`words`) and each
-word is one token, so that no word is ever matched as part of another. The meaning of a parse
-is in its rule names: a complement's name is the relation it states ("on", "gone",
+The grammar is written over whole words: a sentence is first normalised (`earley.words`) and
+each word is one token, so that no word is ever matched as part of another. The meaning of a
+parse is in its rule names: a complement's name is the relation it states ("on", "gone",
 "left_of"), an instruction's the state it asks for (`parses.py` gives each its meaning).
+
+Where what people say could mean two things, one rule decides, whatever the sentence:
+
+- A sequence ("first X, then Y", "X and then Y", "X, after that Y") asks for the state after
+  all of it: the clauses of its items together. The order is not kept: the planner is given
+  the clauses as one goal, and success is all of them holding at the end. "Then the ball" (an
+  item of noun phrases alone) says the item before of them: "put the cup on the block, then
+  the ball" puts both there.
+- A purpose ("turn the block so that it points away from the robot", "... until ...") adds its
+  state to the instruction's; after a verb that asks for nothing by itself ("move the ball so
+  that it is behind the cup") it is the whole goal.
+- "Off the table", "no longer on the table", "on the floor" mean gone, whatever the verb ("get
+  the cup off the table" too): the taught phrasings of gone say so ("the ball is off the
+  table", "the ball is no longer on the table"), and one phrase reads one way. "Not on the
+  table" is the weaker not on(table), which a cup on the block also meets. "No longer" before
+  anything else is "not" ("no longer upright"), and "off" anything else is not on it.
+- "Don't", "never", "without" and "keep ... from" deny the state the instruction asks for:
+  "don't knock the cup over" is not tipped, rather than upright (a cup pushed off the table is
+  neither).
+- "From" after a moved object names where it starts ("move the ball from the post onto the
+  block"), the one it rests on where the name fits several, and asks for nothing where the
+  sentence puts it somewhere; "remove the ball from the support" is not on it.
+- A turn ("turn the block", "rotate the block 90 degrees", "a quarter turn", "around") is said
+  of the block's lie at the start: a quarter turn, or a turn with no angle, the other lie; a
+  half turn the same; other angles are refused (`derived.py`).
+- "Put X down" alone is X on the table; "down" and "back" before a place are read past ("put
+  the ball back on the table").
+- Verbs whose goal is a state: "make/let X disappear, fall over, fall off the table", "X should
+  disappear"; "balance X on Y" is on.
+- Names may describe an object by the start scene: "the other support" (not the one named or
+  rested on), "the empty support", "the support the ball is on", "every cup except the middle
+  one", "the cup nearest the robot" (the front one: the robot looks from the camera's side),
+  "where the ball was", "between the cups"; a noun said once for two ("the left and the right
+  cup").
+- A misspelt word is refused, never guessed, with the sentence spelt right offered; chat
+  spellings ("u", "pls") are spelt out as contractions are.
 """
 
 from __future__ import annotations
 
 import functools
-import re
 
-from lark import Lark, Token
+from lark import Lark
 from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken
-from lark.lexer import Lexer
 from lark.visitors import CollapseAmbiguities
 
+from afford.words import earley
+from afford.words.earley import words
 from afford.words.parses import Build, Item
 
 GRAMMAR = r"""
@@ -282,7 +318,7 @@ np: det _mods noun _posts                -> np_one
   | "them"                               -> them
   | "they"                               -> them
   | "everything"                         -> everything
-// the determiner says how many the noun names (`parses.DETERMINERS`)
+// the determiner says how many the noun names (`lexicon.DETERMINERS`)
 !det: "neither" | "either" | "the" | "this" | "that" | "my" | "a" | "an" | "one" "of" "the" | "any" | "every"
     | "each" | "all"
     | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the" | "both" | "both" "the"
@@ -357,187 +393,21 @@ class Unread(Exception):
         self.reason, self.words, self.at = reason, words, at
 
 
-# ---------------------------------------------------------------------------- words
-_CONTRACTIONS = (
-    (r"\bcan't\b", "can not"),
-    (r"\bcannot\b", "can not"),
-    (r"\bwon't\b", "will not"),
-    (r"\bshan't\b", "shall not"),
-    (r"n't\b", " not"),
-    (r"\b(it|that|there|what|which|who)'s\b", r"\1 is"),
-    (r"'re\b", " are"),
-    (r"'d\b", " would"),
-    (r"'ll\b", " will"),
-    (r"'s\b", " 's"),
-    (r"\b1st\b", "first"),
-    (r"\b2nd\b", "second"),
-    (r"\b3rd\b", "third"),
-    (r"\b2\b", "two"),
-    (r"\b3\b", "three"),
-)
-
-
-# Chat spellings, spelt out as contractions are (a misspelt word is not guessed: it is refused
-# with the spelling that reads offered).
-_SPELT = {"u": "you", "pls": "please", "plz": "please", "thx": "thanks", "ur": "your", "r": "are"}
-
-
-def words(text: str) -> list[str]:
-    """The sentence as the grammar's words: lower case, contractions spelt out ("isn't": "is
-    not", "block's": "block 's"), hyphens as spaces, commas kept as words of their own (they
-    join items and lists), the rest of the punctuation dropped."""
-    t = text.lower().replace("\u2019", "'").replace("\u2018", "'")
-    for pattern, spelt in _CONTRACTIONS:
-        t = re.sub(pattern, spelt, t)
-    t = re.sub(r"(\d)\s*(°|º|deg\b)", r"\1 degrees", t)
-    t = t.replace("&", " and ")
-    t = re.sub(r"[;:]", ",", t)
-    t = re.sub(r"[-/]", " ", t)
-    t = re.sub(r"[.!?\"()]", " ", t)
-    t = t.replace(",", " , ")
-    return [_SPELT.get(w, w) for w in t.split()]
-
-
 # ---------------------------------------------------------------------------- the parser
-_RULE = re.compile(r"^([!?]?_?[a-z]\w*)\s*:(.*)$")
-_LEADING_WORD = re.compile(r'^\s*"([^"\s]+)"\s*(.*?)\s*$')
-
-
-def _alternatives(body: str) -> list[str]:
-    """A rule's body split at its top-level "|" (not inside brackets or quotes)."""
-    alts, depth, quoted, current = [], 0, False, ""
-    for ch in body:
-        quoted = quoted != (ch == '"')
-        if not quoted and ch in "([":
-            depth += 1
-        elif not quoted and ch in ")]":
-            depth -= 1
-        elif not quoted and ch == "|" and depth == 0:
-            alts.append(current)
-            current = ""
-            continue
-        current += ch
-    return [*alts, current]
-
-
-def _definitions(grammar: str) -> list[list[str]]:
-    """The grammar's lines, grouped by the rule each defines (a line of its own otherwise)."""
-    definitions: list[list[str]] = []
-    for line in grammar.split("\n"):
-        if _RULE.match(line) or not definitions or not line.startswith(" ") or not line.strip():
-            definitions.append([line])
-        else:
-            definitions[-1].append(line)
-    return definitions
-
-
-# The rules whose words make a goal a sentence rather than a phrase (a suggestion holds one).
-VERB_RULES = (
-    "_holds", "_be", "_have", "_be_base", "_verb", "_verb_base", "_stand", "_modal", "_do", "_keep",
-    "_putdown", "_make", "_turn", "_swap", "_hide", "_put", "_stand_verb", "_take", "_give", "_tip",
-    "_topple", "_rid",
-)  # fmt: skip
-
-
 @functools.cache
-def verbs() -> frozenset[str]:
-    """The first word of each alternative of VERB_RULES, and "pick" ("pick up")."""
-    found = {"pick"}
-    for lines in _definitions(GRAMMAR):
-        m = _RULE.match(lines[0])
-        if m is not None and m.group(1) in VERB_RULES:
-            for a in _alternatives(" ".join([m.group(2), *lines[1:]])):
-                w = _LEADING_WORD.match(a.split('" ')[0] + '"' if '" ' in a else a)
-                found |= {w.group(1)} if w else set()
-    return frozenset(found - {"both", "all"})
+def _built() -> tuple[Lark, frozenset[str]]:
+    return earley.build(GRAMMAR)
 
 
-def classed(grammar: str) -> tuple[str, dict[str, frozenset[str]]]:
-    """The grammar with each rule's alternatives that differ only in their first word (three
-    one-word alternatives or more, or two longer ones) made one: that word a word class, a
-    terminal of its own, and the words of each class. Earley predicts every alternative of a
-    rule it expects: a verb class of 50 words is 50 items at every place a verb may start, and
-    one terminal is one item (a parse takes less than half the time)."""
-    definitions = _definitions(grammar)
-    out: list[str] = []
-    classes: dict[str, frozenset[str]] = {}
-    for lines in definitions:
-        m = _RULE.match(lines[0])
-        if m is None:
-            out += lines
-            continue
-        alts = _alternatives(re.sub(r"//[^\n]*", "", " ".join([m.group(2), *lines[1:]])))
-        tails: dict[str, list[str]] = {}
-        for a in alts:
-            w = _LEADING_WORD.match(a)
-            if w is not None:
-                tails.setdefault(w.group(2), []).append(w.group(1))
-        kept: list[str] = []
-        for a in alts:
-            w = _LEADING_WORD.match(a)
-            words = tails.get(w.group(2), []) if w is not None else []
-            if w is None or len(words) < (3 if not w.group(2) else 2):
-                kept.append(a.strip())
-            elif words[0] == w.group(1):
-                # an underscore: the class's token is left out of the tree, as a quoted word's is
-                name = f"_W_{m.group(1).strip('!?_').upper()}_{len(classes)}"
-                classes[name] = frozenset(words)
-                kept.append(f"{name} {w.group(2)}".strip())
-                out.append(f"{name}: " + " | ".join(f'"{x}"' for x in dict.fromkeys(words)))
-        out.append(f"{m.group(1)}: {' | '.join(kept)}")
-    return "\n".join(out), classes
-
-
-class _Words(Lexer):
-    """Each word of a normalised sentence is one token: of the terminal that spells it, or of
-    none where only word classes hold it (`_member` matches those)."""
-
-    def __init__(self, lexer_conf) -> None:
-        self.types = {t.pattern.value: t.name for t in lexer_conf.terminals if t.pattern.type == "str"}
-
-    def lex(self, data: str):
-        pos = 0
-        for i, word in enumerate(data.split(" ")):
-            # The column is the word's index: where a parse fails is named as a word.
-            kind = self.types.get(word, "WORD")
-            yield Token(kind, word, start_pos=pos, end_pos=pos + len(word), line=1, column=i)
-            pos += len(word) + 1
-
-
-@functools.cache
-def _grammar() -> tuple[str, dict[str, frozenset[str]], dict[str, frozenset[str]]]:
-    """The grammar with its word classes, each class's words, and each word's classes."""
-    text, classes = classed(GRAMMAR)
-    member: dict[str, set[str]] = {}
-    for name, ws in classes.items():
-        for w in ws:
-            member.setdefault(w, set()).add(name)
-    return text, classes, {w: frozenset(names) for w, names in member.items()}
-
-
-def _member(term, token) -> bool:
-    """Does the token's word fit the terminal: its own, or a word class that holds it."""
-    return term.name == token.type or term.name in _grammar()[2].get(token.value, ())
-
-
-@functools.cache
 def parser() -> Lark:
     """The grammar built once (Earley: natural sentences are ambiguous, and every parse is
     kept so that the scene can tell which is meant)."""
-    lark = Lark(_grammar()[0], parser="earley", lexer=_Words, ambiguity="explicit", propagate_positions=True)
-    earley = lark.parser.parser
-    # lark's Earley matches a terminal to a token by name; a word class is matched by
-    # membership instead (`classed`)
-    assert hasattr(earley, "term_matcher"), "lark's Earley parser changed: see grammar.classed"
-    earley.term_matcher = _member
-    return lark
+    return _built()[0]
 
 
-@functools.cache
 def known_words() -> frozenset[str]:
     """Every word the grammar reads."""
-    spelt = {t.pattern.value for t in parser().lexer_conf.terminals if t.pattern.type == "str"}
-    return frozenset(spelt.union(*_grammar()[1].values()))
+    return _built()[1]
 
 
 def read(text: str) -> list[tuple[Item, ...]]:

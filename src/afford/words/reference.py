@@ -18,8 +18,9 @@ import numpy as np
 from afford.sim.constants import WORDS
 from afford.words import derived, grammar
 from afford.words.clauses import Clause
+from afford.words.derived import Unresolved, own
 from afford.words.facts import RELATIONS, Fact, State
-from afford.words.parses import ORDER, Item, Noun, Pred
+from afford.words.parses import Item, Noun, Pred
 
 COLOURS = {"cup": "blue", "ball": "red", "support": "black", "block": "yellow"}
 ORDER_WORDS = {2: ("left", "right"), 3: ("left", "middle", "right")}
@@ -43,15 +44,6 @@ QUANTITIES = {"both": 2, "two": 2, "three": 3}
 STANDS_FOR = {"turn": "lies", "between": "left_of", "swap": "left_of"}
 SAID |= {"turn": "turned", "between": "between two objects", "swap": "swapped"}
 PLACES = ("on", "on_end", "left_of", "right_of", "in_front_of", "behind", "lies")  # what a gone object is not
-
-
-class Unresolved(Exception):
-    """A noun phrase or clause that fits nothing the scene allows: the reason, the words of
-    the phrase that failed (a suggestion replaces them) and the kinds that would fit there."""
-
-    def __init__(self, reason: str, phrase: str = "", fits: tuple[str, ...] = ()) -> None:
-        super().__init__(reason)
-        self.reason, self.phrase, self.fits = reason, phrase, fits
 
 
 class Ambiguous(Exception):
@@ -135,7 +127,7 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
         fits = [k for k in fits if COLOURS[state.kind(k)] == noun.colour]
         if not fits:
             told = f"the {plural} are {COLOURS[kind]}" if kind else f"nothing is {noun.colour}"
-            raise Unresolved(f"{noun.words!r} names no object of the scene: {told}", noun.words, _own(noun))
+            raise Unresolved(f"{noun.words!r} names no object of the scene: {told}", noun.words, own(noun))
     for pred in noun.restrict:
         before = len(fits)
         fits = [k for k in fits if _holds_of(pred, k, state, context)]
@@ -148,9 +140,9 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
         context.kinds[role] = kind
     fits = _described(noun, fits, state, context)
     if not fits:
-        raise Unresolved(f"{noun.words!r} names no object of the scene", noun.words, _own(noun))
+        raise Unresolved(f"{noun.words!r} names no object of the scene", noun.words, own(noun))
     for word in noun.order:
-        fits = _in_order(noun, word, fits, state)
+        fits = derived.in_order(noun, word, fits, state)
     if kind is not None:  # after the phrases inside it ("the cup left of the ball": cup)
         context.kinds[role] = kind
     return _counted(noun, fits, state)
@@ -173,16 +165,8 @@ def _described(noun: Noun, fits: list[int], state: State, context: _Context) -> 
         fits = [k for k in fits if k not in left_out]
     if noun.other:
         said = {k for group in context.mentioned for k in group}
-        try:
-            fits = derived.other_than(noun, fits, said, context.subject, state)
-        except derived.Unsaid as e:
-            raise Unresolved(e.reason, e.phrase, _own(noun)) from None
+        fits = derived.other_than(noun, fits, said, context.subject, state)
     return fits
-
-
-def _own(noun: Noun) -> tuple[str, ...]:
-    """The kind a failed phrase names, whose objects a suggestion names first."""
-    return (noun.kind,) if noun.kind else ()
 
 
 def _counted(noun: Noun, fits: list[int], state: State) -> list[int]:
@@ -192,11 +176,11 @@ def _counted(noun: Noun, fits: list[int], state: State) -> list[int]:
             f"{noun.words!r} names no object alone: {len(fits)} {PLURALS[noun.kind]} fit it "
             f"({_listed(state, fits)})",
             noun.words,
-            _own(noun),
+            own(noun),
         )
     if want is not None and len(fits) != want:
         counted = f"{len(fits)} {PLURALS[noun.kind] if len(fits) != 1 else noun.kind or 'object'}"
-        raise Unresolved(f"{noun.words!r}: the scene has {counted}, not {want}", noun.words, _own(noun))
+        raise Unresolved(f"{noun.words!r}: the scene has {counted}, not {want}", noun.words, own(noun))
     return fits
 
 
@@ -232,46 +216,6 @@ def _nearest(noun: Noun, fits: list[int], other: Noun, state: State, context: _C
     if len(ranked) > 1 and ranked[1][0] - ranked[0][0] <= WORDS.beside:
         raise Unresolved(f"{noun.words!r}: two objects are about as near; name it another way", noun.words)
     return [ranked[0][1]] if ranked else []
-
-
-def _in_order(noun: Noun, word: str, fits: list[int], state: State) -> list[int]:
-    """The one of `fits` an order word picks: by place from the camera's left (x) or from its
-    front (y), among those standing on the table, clear of its neighbours by WORDS.beside (as
-    the taught names are)."""
-    axis, rank = ORDER[word]
-    standing = [k for k in fits if state.standing(k)]
-    if rank == "ends":  # "the outer cups": the first and the last of three or more
-        if len(standing) < 3:
-            raise Unresolved(
-                f"{noun.words!r}: of {len(standing)} none is between the others", noun.words, _own(noun)
-            )
-        ends = sorted(standing, key=lambda k: state.poses[k, 0])
-        return [ends[0], ends[-1]]
-    if len(standing) <= 1 and rank in (0, -1):
-        return standing or fits  # "the left cup" of one cup: it
-    column = 0 if axis == "x" else 1
-    order = sorted(standing, key=lambda k: state.poses[k, column])
-    if axis == "x" and noun.from_right and word in ("first", "second", "third"):
-        order = order[::-1]
-    if rank is None:
-        if len(order) % 2 == 0:
-            raise Unresolved(f"{noun.words!r}: of {len(order)} none is in the middle", noun.words, _own(noun))
-        rank = len(order) // 2
-    if not -len(order) <= rank < len(order):
-        raise Unresolved(
-            f"{noun.words!r} names no object of the scene: there are {len(order)}", noun.words, _own(noun)
-        )
-    i = rank % len(order)
-    here = state.poses[order[i], column]
-    gaps = [abs(here - state.poses[order[j], column]) for j in (i - 1, i + 1) if 0 <= j < len(order)]
-    if gaps and min(gaps) <= WORDS.beside:
-        side = "side by side" if axis == "x" else "one behind the other"
-        raise Unresolved(
-            f"{noun.words!r}: they stand too close {side} to tell which is meant; name it another way",
-            noun.words,
-            _own(noun),
-        )
-    return [order[i]]
 
 
 def _pronoun(noun: Noun, kinds: tuple[str, ...], state: State, context: _Context) -> int:
@@ -345,8 +289,6 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
                 context.source = s if pred.source else None
                 try:
                     pairs = _pairs(pred, s, noun, subjects, state, context)
-                except derived.Unsaid as e:
-                    raise Unresolved(e.reason, e.phrase) from None
                 finally:
                     del context.mentioned[0]
                     context.source = None

@@ -9,9 +9,10 @@ and an instruction per relation), the one nearest to what was said, word for wor
 from __future__ import annotations
 
 import difflib
+import functools
 from collections.abc import Callable
 
-from afford.words import grammar
+from afford.words import earley, grammar
 from afford.words.facts import RELATIONS, State
 from afford.words.reference import names
 
@@ -30,6 +31,20 @@ PLAIN = {
     "in_front_of": ("{x} is in front of {y}",),
     "behind": ("{x} is behind {y}",),
 }
+
+
+# The rules whose words make a goal a sentence rather than a phrase (a suggestion holds one).
+VERB_RULES = (
+    "_holds", "_be", "_have", "_be_base", "_verb", "_verb_base", "_stand", "_modal", "_do", "_keep",
+    "_putdown", "_make", "_turn", "_swap", "_hide", "_put", "_stand_verb", "_take", "_give", "_tip",
+    "_topple", "_rid",
+)  # fmt: skip
+
+
+@functools.cache
+def verbs() -> frozenset[str]:
+    """The verbs and auxiliaries that start VERB_RULES' alternatives, and "pick" ("pick up")."""
+    return (earley.first_words(grammar.GRAMMAR, VERB_RULES) | {"pick"}) - {"both", "all"}
 
 
 def plain_sentences(state: State) -> list[str]:
@@ -87,10 +102,10 @@ def nearest(
         tries += [text.replace(phrase, n, 1).replace(f"{n} are ", f"{n} is ") for _, n in named]
     # a sentence stays one: a swapped or dropped word must not leave a phrase ("the ball gone
     # on the block" reads as a verbless state, and no person writes it)
-    verbs = grammar.verbs()
-    sentence = any(w in verbs for w in said)
+    verb_words = verbs()
+    sentence = any(w in verb_words for w in said)
     for t in list(dict.fromkeys(" ".join(t.split()) for t in tries))[:TRIES]:
-        if t and t != text and (not sentence or any(w in verbs for w in t.split())) and reads(t):
+        if t and t != text and (not sentence or any(w in verb_words for w in t.split())) and reads(t):
             return t
     plain = plain_sentences(state)
     plain.sort(key=lambda p: -likeness(p, text))

@@ -47,6 +47,115 @@ def test_the_hand_written_sentences_read_to_the_clauses_they_mean():
     assert not wrong, "\n".join(wrong)
 
 
+# Sentences written cold, by people who never saw the grammar, for the scenes above: the
+# development set (the grammar was fixed against it) and the held-out set (measured once, after).
+COLD = json.loads((Path(__file__).parent / "goal_sentences_cold.json").read_text())
+HELDOUT = json.loads((Path(__file__).parent / "goal_sentences_heldout.json").read_text())
+HELDOUT_FLOOR = 0.93  # of the held-out set read rightly or refused where meant: 94 of 101
+
+
+def measured(sentences: dict) -> tuple[float, list[str]]:
+    """The share of a cold set read to the clauses meant (in any order) or refused where
+    meant, and what went wrong with the rest."""
+    wrong = []
+    for kind in ("read", "refuse"):
+        for case in sentences[kind]:
+            state = scene_state(case["scene"])
+            try:
+                got = sorted(shown(c, state) for c in parse(case["text"], state).clauses)
+            except SentenceError as e:
+                got = [f"refused: {e}"]
+            meant = sorted(case["clauses"]) if kind == "read" else None
+            if (got != meant) if kind == "read" else not got[0].startswith("refused"):
+                wrong.append(f"{case['scene']}: {case['text']!r}: {got} (meant {meant or 'a refusal'})")
+    return 1 - len(wrong) / (len(sentences["read"]) + len(sentences["refuse"])), wrong
+
+
+def test_the_sentences_written_cold_read_as_meant():
+    assert len(COLD["read"]) + len(COLD["refuse"]) >= 100
+    share, wrong = measured(COLD)
+    assert not wrong, "\n".join(wrong)
+
+
+def test_the_held_out_sentences_read_as_meant():
+    assert len(HELDOUT["read"]) + len(HELDOUT["refuse"]) >= 60
+    share, wrong = measured(HELDOUT)
+    assert share >= HELDOUT_FLOOR, f"{share:.3f}\n" + "\n".join(wrong)
+
+
+@pytest.mark.parametrize("sentences", [COLD, HELDOUT], ids=["cold", "heldout"])
+def test_every_refusal_is_one_line_with_a_sentence_that_reads(sentences):
+    """Each refusal of a cold set, meant or not, offers a reading a person would write: a
+    sentence (it has a verb, as every goal the grammar reads as a sentence does), written as
+    people write (no space before a comma), read in the same scene."""
+    from afford.words.suggest import verbs
+
+    refused = 0
+    for case in sentences["read"] + sentences["refuse"]:
+        state = scene_state(case["scene"])
+        try:
+            parse(case["text"], state)
+            continue
+        except SentenceError as e:
+            message = str(e)
+        refused += 1
+        assert "\n" not in message
+        suggested = message.split("; did you mean ")[-1]
+        assert suggested.startswith("'") and suggested.endswith("'?"), message
+        suggested = suggested[1:-2]
+        parse(suggested, state)
+        assert any(w in verbs() for w in suggested.split()) and " ," not in suggested, message
+        assert "suggests" not in case or suggested == case["suggests"], message
+    assert refused >= len(sentences["refuse"])
+
+
+def test_how_a_goal_was_read_is_written_back_in_words():
+    """`afford plan --goal` prints its reading before it plans: each clause in words."""
+    from afford.cli.words import goal_reading, reading_line
+
+    state = scene_state("two-cups")
+    text = "first put the left cup on the block, then push the ball off the table"
+    reading = goal_reading(text, parse(text, state), state)
+    assert reading["clauses"] == ["the left cup is on the block", "the ball is gone"]
+    assert reading["facts"] == ["on cup0 block0", "gone ball0"]
+    assert reading_line(reading) == "goal read as: the left cup is on the block; the ball is gone"
+
+
+@pytest.mark.parametrize(
+    ("scene", "text", "clauses"),
+    [
+        # a sequence is the state after all of it: its clauses together, the order not kept
+        (
+            "two-cups",
+            "first knock over the left cup, then put the right cup on the block",
+            ["on cup1 block0", "tipped cup0"],
+        ),
+        (
+            "two-cups",
+            "first put the left cup on the block, then the right cup",
+            ["on cup0 block0", "on cup1 block0"],
+        ),
+        # a turn is said of how the block lies at the start (across here)
+        ("two-cups", "turn the block", ["lies block0 lengthwise"]),
+        ("two-cups", "rotate the block 180 degrees", ["lies block0 across"]),
+        ("two-cups", "turn the block a quarter turn", ["lies block0 lengthwise"]),
+        # "off the table" and "no longer on the table" are gone, "not on the table" is not on it
+        ("cup-ball-block", "get the cup off the table", ["gone cup0"]),
+        ("cup-ball-block", "the cup should no longer be on the table", ["gone cup0"]),
+        ("cup-ball-block", "the cup should not be on the table", ["not on cup0 table"]),
+        ("cup-ball-block", "the cup should no longer be upright", ["not upright cup0"]),
+        # a purpose is part of the goal
+        ("cup-ball-block", "move the ball so that it is behind the cup", ["behind ball0 cup0"]),
+        ("stacked", "swap the cup and the ball", ["on ball0 block0", "on cup0 support0"]),
+        ("two-supports", "put the cup where the ball is", ["on cup0 support0"]),
+        ("two-supports", "put the cup on the empty support", ["on cup0 support1"]),
+    ],
+)
+def test_goals_said_in_more_ways_read_by_the_rules_of_the_grammar(scene, text, clauses):
+    state = scene_state(scene)
+    assert sorted(shown(c, state) for c in parse(text, state).clauses) == sorted(clauses)
+
+
 def test_what_a_goal_reads_to_is_written_in_words_the_agreement_model_knows():
     """The statement's text is what the model scores: every word in its vocabulary, each
     clause in a taught phrasing, and read back to the same clauses."""

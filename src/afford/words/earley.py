@@ -55,6 +55,12 @@ def words(text: str) -> list[str]:
     return [_SPELT.get(w, w) for w in t.split()]
 
 
+def spoken(said: list[str]) -> str:
+    """Normalised words written back as a person writes them: "block , then" as "block,
+    then", "block 's" as "block's"."""
+    return " ".join(said).replace(" ,", ",").replace(" 's", "'s")
+
+
 _RULE = re.compile(r"^([!?]?_?[a-z]\w*)\s*:(.*)$")
 _LEADING_WORD = re.compile(r'^\s*"([^"\s]+)"\s*(.*?)\s*$')
 

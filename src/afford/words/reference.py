@@ -203,18 +203,20 @@ def _holds_of(pred: Pred, k: int, state: State, context: _Context) -> bool:
 def _nearest(noun: Noun, fits: list[int], other: Noun, state: State, context: _Context) -> list[int]:
     """The one of `fits` nearest `other` on the table, clearly nearer than the next."""
     if other.quantity == "it":
-        raise Unresolved(f"{noun.words!r}: say what it is near by name", noun.words)
+        raise Unresolved(f"{noun.words!r}: say what it is near by name", noun.words, own(noun))
     (o, *more) = _counted(other, resolve(other, state, context), state)
     context.inner.append(o)
     if more:
-        raise Unresolved(f"{noun.words!r}: near one object, not {len(more) + 1}", noun.words)
+        raise Unresolved(f"{noun.words!r}: near one object, not {len(more) + 1}", noun.words, own(noun))
     ranked = sorted(
         (float(np.linalg.norm(state.poses[k, :2] - state.poses[o, :2])), k)
         for k in fits
         if k != o and state.standing(k) and state.standing(o)
     )
     if len(ranked) > 1 and ranked[1][0] - ranked[0][0] <= WORDS.beside:
-        raise Unresolved(f"{noun.words!r}: two objects are about as near; name it another way", noun.words)
+        raise Unresolved(
+            f"{noun.words!r}: two objects are about as near; name it another way", noun.words, own(noun)
+        )
     return [ranked[0][1]] if ranked else []
 
 

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from afford.words.clauses import Clause, SentenceError, Statement
+from afford.words.earley import spoken
 from afford.words.facts import RELATION_NAMES, RELATIONS, Fact, State
 from afford.words.grammar import Unread, words
 from afford.words.reference import COLOURS, ORDER_WORDS, Ambiguous, Unresolved, names, understand
@@ -309,7 +310,7 @@ def _no_name(phrase: str, said: list[str], state: State) -> str:
         attempt = text.replace(phrase, called[k][0], 1)
         try:
             if _taught(attempt, state) is not None:
-                return f"{reason}; did you mean {attempt!r}?"
+                return f"{reason}; did you mean {spoken(attempt.split())!r}?"
         except SentenceError:
             continue
     # Not the grammar's search: this refusal is met often while a dataset is drawn, and must
@@ -366,10 +367,10 @@ def parse(text: str, state: State) -> Statement:
     except Unread as e:
         said = e.words
         if e.at is not None and e.reason.startswith("unknown word"):
-            message = f"{e.reason} in {' '.join(said)!r}"
+            message = f"{e.reason} in {spoken(said)!r}"
         else:
-            after = f", after {' '.join(said[: e.at])!r}" if e.at else ""
-            message = f"cannot read {' '.join(said)!r} as a goal: {e.reason}{after}" if said else e.reason
+            after = f", after {spoken(said[: e.at])!r}" if e.at else ""
+            message = f"cannot read {spoken(said)!r} as a goal: {e.reason}{after}" if said else e.reason
             near = next((w for w in said if w in _NEAR), None)
             if near is not None:
                 message += (

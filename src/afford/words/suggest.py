@@ -17,6 +17,9 @@ from afford.words.facts import RELATIONS, State
 from afford.words.reference import names
 
 TRIES = 4  # sentences tried against the scene before falling back to the plain ones (each a parse)
+# and at most this many words parsed in all, the sentence's own included: a parse takes about
+# 2 ms a word, and a refusal must stay under 50 ms with the plain sentence it may fall back to
+WORDS_TRIED = 20
 # Plain sentences per relation: {x} the subject, {y} the other object; a state, an instruction.
 PLAIN = {
     "on": ("{x} is on {y}", "put {x} on {y}"),
@@ -104,9 +107,15 @@ def nearest(
     # on the block" reads as a verbless state, and no person writes it)
     verb_words = verbs()
     sentence = any(w in verb_words for w in said)
+    budget = WORDS_TRIED - len(said)
     for t in list(dict.fromkeys(" ".join(t.split()) for t in tries))[:TRIES]:
-        if t and t != text and (not sentence or any(w in verb_words for w in t.split())) and reads(t):
-            return t
+        if not t or t == text or (sentence and not any(w in verb_words for w in t.split())):
+            continue
+        budget -= len(t.split())
+        if budget < 0:
+            break
+        if reads(t):
+            return earley.spoken(t.split())
     plain = plain_sentences(state)
     plain.sort(key=lambda p: -likeness(p, text))
     return next((p for p in plain[:3] if reads(p)), plain[0] if plain else "the cup is on the table")

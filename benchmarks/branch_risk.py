@@ -40,13 +40,13 @@ def main() -> None:
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
     from afford.sim.perturb import Perturbation
     from afford.sim.scene import Scene
 
     risks = [float(r) for r in args.risks.split(",")]
     perturbation = Perturbation(*[float(v) for v in args.perturb.split(",")])
-    nets = load_learned(args.weights)
+    nets = Nets(args.weights)
     quiet = SearchConfig(progress=False)
     scene = Scene()
     rows = []

@@ -42,10 +42,10 @@ def main() -> None:
     from afford.planning.strategies import search
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
     from afford.sim.scene import Scene
 
-    learned = load_learned(args.weights)
+    learned = Nets(args.weights)
     scene = Scene()
     files = sorted(Path(args.tasks).glob("*.json"))
     plain = PlannerConfig(search=SearchConfig(progress=False))

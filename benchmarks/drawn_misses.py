@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 from collections import defaultdict
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -28,23 +27,16 @@ from afford.data.torch_data import PredictionData, collate_prediction
 from afford.metrics import matches
 from afford.objects.rollout import ObjectRollout
 from afford.objects.state import KINDS, SLOT_KIND
-from afford.shipped import (
-    DYNAMICS_FILE,
-    PERCEPTION_FILE,
-    load_learned,
-    load_object_dynamics,
-    load_object_perception,
-)
+from afford.shipped import Nets
 from afford.sim.affordance import decode_affordance
 
 STILL_M = 0.002  # an object that moved less than this in the step stayed
 
 
 def misses(data: Dataset, split: str, objects: str | None) -> dict:
-    world = ObjectRollout(
-        load_object_perception(objects, fallback=True), load_object_dynamics(objects, fallback=True)
-    )
-    recognise = load_learned().recognizer
+    nets = Nets(objects)
+    world = ObjectRollout(nets.perception, nets.dynamics)
+    recognise = nets.recognizer
     runs = PredictionData(data, split, max_steps=1, random_start=False)
     groups: dict[str, list[float]] = defaultdict(list)
     found = {"drawn": 0, "true": 0, "total": 0}
@@ -86,11 +78,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", default="data/part")
     parser.add_argument("--split", default="test")
-    parser.add_argument("--objects", metavar="DIR", help="object nets (else the shipped)")
+    parser.add_argument(
+        "--objects", metavar="DIR", help="a weights folder whose nets to measure (else the shipped)"
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    if args.objects and not any((Path(args.objects) / n).is_file() for n in (PERCEPTION_FILE, DYNAMICS_FILE)):
-        parser.error(f"{args.objects}: holds neither {PERCEPTION_FILE} nor {DYNAMICS_FILE}")
     r = misses(Dataset(args.data), args.split, args.objects)
     if args.json:
         print(json.dumps(r, indent=2))

@@ -46,9 +46,9 @@ def main() -> None:
 
     from afford.data.format import Dataset
     from afford.prediction.ensemble import calibrate, spearman
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
 
-    members = load_learned(args.weights).members
+    members = Nets(args.weights).members
     torch.set_num_threads(members[0].config.training.threads)
     data = Dataset(args.data)
     val = calibrate(members, data, "val", limit=args.runs)

@@ -29,10 +29,10 @@ def main() -> None:
 
     from afford.data.format import Dataset
     from afford.prediction.calibration import fit_per_type, fit_platt, head_logits
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
     from afford.sim.affordances import TYPES
 
-    net = load_learned(args.weights).predictor.eval()
+    net = Nets(args.weights).predictor.eval()
     if net.config.outcomes.hypotheses_by != "effect":
         raise SystemExit("head_by_type: the prediction net has no side-effect head")
     torch.set_num_threads(net.config.training.threads)

@@ -19,7 +19,7 @@ from afford.planning.learned import LearnedModel
 from afford.planning.strategies import search
 from afford.planning.tasks import load_task
 from afford.planning.tree import SearchConfig
-from afford.shipped import load_learned
+from afford.shipped import Nets
 from afford.sim.scene import Scene
 
 
@@ -31,7 +31,7 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
-    nets = load_learned(args.weights)
+    nets = Nets(args.weights)
     recognizer, predictor = nets.recognizer, nets.predictor
     scene = Scene()
     task = load_task(args.task, scene)

@@ -127,9 +127,9 @@ def head_probabilities(
     from afford.data.effects import sequence_effects, slot_kind
     from afford.data.format import Dataset
     from afford.images import to_chw
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
 
-    net = load_learned(weights).predictor.eval()
+    net = Nets(weights).predictor.eval()
     if net.config.outcomes.hypotheses < 2:
         raise SystemExit("place_outcomes: --weights needs a prediction net with two outcomes per step")
     torch.set_num_threads(net.config.training.threads)

@@ -49,11 +49,11 @@ def main() -> None:
 
     from afford.planning.diagnose import diagnose
     from afford.planning.random_tasks import random_task
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
     from afford.sim.scene import Scene
 
     torch.set_num_threads(2)
-    learned = load_learned(args.weights)
+    learned = Nets(args.weights)
     scene = Scene()
     found = []
     for r in tqdm(failed, desc="diagnose", unit="task", disable=args.json):

@@ -214,9 +214,9 @@ def run(args) -> None:
     models = dict(nets)
     scene = Scene()
     from afford.objects.perception_train import load_perception
-    from afford.shipped import load_object_perception
+    from afford.shipped import Nets
 
-    seeing = load_perception(args.perception) if args.perception else load_object_perception()
+    seeing = load_perception(args.perception) if args.perception else Nets().perception
     starts = {"true": [None], "perceived": [seeing]}
     starts["both"] = starts["true"] + starts["perceived"]
     sweeps = [

@@ -48,12 +48,12 @@ def main() -> None:
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
     from afford.planning.uncertain import EnsembleModel
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
     from afford.sim.perturb import Perturbation
     from afford.sim.scene import Scene
 
     perturbation = Perturbation(*[float(v) for v in args.perturb.split(",")])
-    nets = load_learned(args.weights)
+    nets = Nets(args.weights)
     quiet = SearchConfig(progress=False)
     averse = PlannerConfig(search=quiet) if args.risk is None else PlannerConfig(search=quiet, risk=args.risk)
     ways = {

@@ -89,18 +89,16 @@ def test_the_planner_keeps_the_optimised_plan_only_when_it_comes_closer():
 
 
 def test_the_shipped_continuous_turn_net_predicts_the_goal_angle_best():
-    """The shipped continuous-turn net (weights/continuous, sharing the recognition net) on the
+    """The shipped continuous-turn net (weights/continuous, planned with the shipped recognition net) on the
     task of aligning a bare block to 30 degrees: over a sweep of angles its predicted eq. (5) is
     least near 30 or -150 (the block is symmetric), not at an end of the range or at +-90."""
     from afford.images import to_chw
     from afford.planning.tasks import load_task
-    from afford.shipped import CONTINUOUS, RECOGNITION_FILE, WEIGHTS, find_weights, load_learned
+    from afford.shipped import CONTINUOUS_PREDICTION, Nets
     from afford.sim.affordance import encode_affordance
     from afford.sim.scene import Scene
 
-    rec, _ = find_weights(CONTINUOUS)
-    assert rec == WEIGHTS / RECOGNITION_FILE
-    net = load_learned(CONTINUOUS).predictor
+    net = Nets(prediction=CONTINUOUS_PREDICTION).predictor
     scene = Scene()
     task = load_task("tasks/continuous/01-align-30.json", scene)
     scene.reset(task.scene)

@@ -150,7 +150,7 @@ def test_bad_perturb_and_missing_members_are_one_line_errors(tmp_path, capsys):
 def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, capsys):
     from dataclasses import asdict
 
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
     from afford.training.checkpoint import save_checkpoint
 
     torch.manual_seed(0)
@@ -163,11 +163,17 @@ def test_exported_members_make_the_ensemble_planner_and_its_record(tmp_path, cap
         save_checkpoint(runs / name / "best.safetensors", net, kind, asdict(config), 1)
     # A member's head calibration goes into its config, as the main prediction net's does.
     (runs / "member" / "calibration.json").write_text(json.dumps({"choice_scale": 0.5, "choice_bias": -1.0}))
-    pair = ["export", "--recognition", str(runs / "recognition"), "--prediction", str(runs / "prediction")]
-    assert main([*pair, "--out", str(tmp_path / "alone")]) == 0
-    assert main([*pair, "--member", str(runs / "member"), "--out", str(tmp_path / "two")]) == 0
-    assert (tmp_path / "two" / "ensemble" / "prediction-1.safetensors").is_file()
-    members = load_learned(tmp_path / "two").members
+    for out in ("alone", "two"):
+        for file, run in (
+            ("recognition.safetensors", "recognition"),
+            ("prediction.safetensors", "prediction"),
+        ):
+            assert (
+                main(["weights", "export", file, "--run", str(runs / run), "--out", str(tmp_path / out)]) == 0
+            )
+    member = ["weights", "export", "ensemble/prediction-1.safetensors", "--run", str(runs / "member")]
+    assert main([*member, "--out", str(tmp_path / "two")]) == 0
+    members = Nets(tmp_path / "two").members
     head = (members[1].config.outcomes.choice_scale, members[1].config.outcomes.choice_bias)
     assert len(members) == 2 and head == (0.5, -1.0)
     capsys.readouterr()
@@ -212,9 +218,9 @@ def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(s
 def test_the_shipped_ensemble_plans_a_tipping_edge_task_and_sees_its_spread(scene):
     from afford.planning.run import solve
     from afford.planning.tasks import load_task
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
 
-    nets = load_learned()
+    nets = Nets()
     assert len(nets.members) == 3 and nets.members[0] is nets.predictor
     task = load_task("tasks/uncertain/02-ball-near-a-tipping-edge.json", scene)
     o = solve(task, "ensemble", scene, PlannerConfig(search=SearchConfig(progress=False)), nets)

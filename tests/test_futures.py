@@ -11,12 +11,12 @@ import torch
 from afford.cli.main import main
 from afford.data.format import Dataset
 from afford.prediction.futures import BASELINES, future_recall
-from afford.shipped import load_learned
+from afford.shipped import Nets
 
 
 @pytest.fixture(scope="module")
 def recognizer():
-    return load_learned().recognizer
+    return Nets().recognizer
 
 
 def test_a_prediction_equal_to_the_truth_scores_like_the_truth(small_dataset, recognizer):

@@ -70,20 +70,8 @@ def test_plan_with_learned_weights_folder(scene, tmp_path, capsys):
         save_checkpoint(tmp_path / "runs" / kind / "best.safetensors", net, kind, asdict(config), 1)
     runs = tmp_path / "runs"
     weights = tmp_path / "weights"
-    assert (
-        main(
-            [
-                "export",
-                "--recognition",
-                str(runs / "recognition"),
-                "--prediction",
-                str(runs / "prediction"),
-                "--out",
-                str(weights),
-            ]
-        )
-        == 0
-    )
+    for file, run in (("recognition.safetensors", "recognition"), ("prediction.safetensors", "prediction")):
+        assert main(["weights", "export", file, "--run", str(runs / run), "--out", str(weights)]) == 0
     capsys.readouterr()
     records = []
     for folder in (runs, weights):
@@ -121,7 +109,7 @@ def test_plan_with_learned_weights_folder(scene, tmp_path, capsys):
         )
         == 2
     )
-    assert "no weights" in capsys.readouterr().err
+    assert "no recognition.safetensors" in capsys.readouterr().err
 
 
 @pytest.mark.slow
@@ -131,11 +119,11 @@ def test_shipped_weights_plan_a_paper_task_that_needs_a_non_canonical_effect(sce
     from afford.planning.run import solve
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
-    from afford.shipped import load_learned
+    from afford.shipped import Nets
 
     torch.set_num_threads(2)
     task = load_task(Path(__file__).parents[1] / "tasks" / "paper" / DEMO_TASK, scene)
-    o = solve(task, "learned", scene, PlannerConfig(search=SearchConfig(progress=False)), load_learned())
+    o = solve(task, "learned", scene, PlannerConfig(search=SearchConfig(progress=False)), Nets())
     assert o.success, o.reason
 
 
@@ -146,12 +134,12 @@ def test_diagnosis_names_recognition_when_the_working_plan_is_not_recognised(sce
 
     from afford.planning.diagnose import diagnose
     from afford.planning.tasks import task_from_json
-    from afford.shipped import LearnedNets
+    from afford.shipped import Nets
 
     torch.manual_seed(0)
     recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.999)
     task = task_from_json(GOOD, scene=scene)
-    d = diagnose(task, scene, LearnedNets(recognizer, PredictionNet(PRED["tiny"])))
+    d = diagnose(task, scene, Nets(recognizer=recognizer, predictor=PredictionNet(PRED["tiny"])))
     assert d.oracle.success and not d.learned.success
     assert d.cause == "recognition"
     assert [s.action for s in d.steps] == ["grasp", "place"] and not d.steps[0].recognised

@@ -8,24 +8,22 @@ import json
 import numpy as np
 
 from afford.cli.main import main
-from afford.objects.draw import Drawer
 from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
 from afford.planning.run import solve
 from afford.planning.strategies import search
 from afford.planning.tasks import load_task
 from afford.planning.tree import SearchConfig
-from afford.shipped import load_learned, load_object_dynamics, load_object_perception
+from afford.shipped import Nets
 
 TASK = "tasks/examples/cup-on-block.json"  # a cup onto the block: grasp, then place
+NETS = Nets()  # the package's nets, each loaded once for the module's tests
 
 
 def test_a_two_step_plan_is_found_and_its_states_are_drawn(scene):
     task = load_task(TASK)
     scene.reset(task.scene)
     start = scene.observe()
-    model = ObjectsModel(
-        start, load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer()
-    )
+    model = ObjectsModel(start, NETS.recognizer, NETS.perception, NETS.dynamics, NETS.drawer)
     result = search(model, task.goal, 2, SearchConfig())
     assert [a.type for a in result.plan] == ["grasp", "place"]
     chosen = result.path()
@@ -42,7 +40,7 @@ def test_the_true_start_is_the_simulators_objects_and_plans_the_task(scene):
     task = load_task(TASK)
     scene.reset(task.scene)
     poses, mask = pose_array(scene), scene.instance_mask()
-    nets = (load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer())
+    nets = (NETS.recognizer, NETS.perception, NETS.dynamics, NETS.drawer)
     model = ObjectsModel(scene.observe(), *nets, start=TrueStart(poses, -1, mask))
     _, state = model.root()
     np.testing.assert_array_equal(state.poses, poses)
@@ -55,7 +53,7 @@ def test_the_true_start_is_the_simulators_objects_and_plans_the_task(scene):
 def test_every_outcome_kept_as_a_branch_still_finds_the_plan(scene):
     task = load_task(TASK)
     scene.reset(task.scene)
-    nets = (load_learned().recognizer, load_object_perception(), load_object_dynamics(), Drawer())
+    nets = (NETS.recognizer, NETS.perception, NETS.dynamics, NETS.drawer)
     model = ObjectsBranchingModel(scene.observe(), *nets, risk=0.5)
     result = search(model, task.goal, 2, SearchConfig())
     assert [a.type for a in result.plan] == ["grasp", "place"]
@@ -89,27 +87,20 @@ def test_plan_closed_loop_with_a_report(tmp_path, capsys):
     assert report.is_file() and report.stat().st_size > 10_000
 
 
-def test_objects_weights_take_a_folder_with_either_net_and_refuse_one_with_neither(tmp_path, capsys):
+def test_a_weights_folder_gives_every_net_from_itself_and_names_the_one_it_lacks(tmp_path, capsys):
     import shutil
-    from argparse import Namespace
 
-    from afford.cli.options import objects_folder
-    from afford.shipped import DYNAMICS_FILE, OBJECTS
+    from afford.shipped import DYNAMICS_FILE, OBJECTS, RECOGNITION_FILE, WEIGHTS
 
     (tmp_path / "objects").mkdir()
+    shutil.copy(WEIGHTS / RECOGNITION_FILE, tmp_path / RECOGNITION_FILE)
     shutil.copy(OBJECTS / DYNAMICS_FILE, tmp_path / "objects" / DYNAMICS_FILE)
-    # the folder `afford weights export` was given is read as its objects/ inside
-    folder = objects_folder(Namespace(objects_weights=str(tmp_path)))
-    assert folder == str(tmp_path / "objects")
-    # the perception net the folder lacks is the shipped one
-    assert load_object_perception(folder, fallback=True) is not None
-    assert load_object_dynamics(folder, fallback=True) is not None
-
-    empty = tmp_path / "empty"
-    empty.mkdir()
-    code = main(["plan", "--task", TASK, "--planner", "objects", "--objects-weights", str(empty)])
+    nets = Nets(tmp_path)
+    assert nets.dynamics is not None and nets.recognizer is not None
+    # the perception net it lacks is not taken from the package: the planner says so in one line
+    code = main(["plan", "--task", TASK, "--planner", "objects", "--weights", str(tmp_path)])
     err = capsys.readouterr().err.strip()
-    assert code == 2 and len(err.splitlines()) == 1 and "--objects-weights" in err, err
+    assert code == 2 and len(err.splitlines()) == 1 and "objects/perception.safetensors" in err, err
 
 
 def test_canonical_plans_checked_by_the_object_world_model(tmp_path, capsys, scene):
@@ -136,12 +127,13 @@ def test_a_failure_is_diagnosed_through_the_object_world_model(scene):
     from afford.recognition.config import PRESETS as REC
     from afford.recognition.infer import Recognizer
     from afford.recognition.model import RecognitionNet
-    from afford.shipped import LearnedNets
 
     torch.manual_seed(0)
     recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"], threshold=0.999)
     task = task_from_json(GOOD, scene=scene)
-    d = diagnose(task, scene, LearnedNets(recognizer, PredictionNet(PRED["tiny"])), planner="objects")
+    d = diagnose(
+        task, scene, Nets(recognizer=recognizer, predictor=PredictionNet(PRED["tiny"])), planner="objects"
+    )
     assert d.oracle.success and not d.learned.success
     assert d.cause == "recognition" and d.to_dict()["planner"] == "objects"
     assert d.steps[-1].true_loss < 1e-3

@@ -9,14 +9,14 @@ from scenarios import block_on_support, do
 from afford.errors import UserError
 from afford.objects.perceive import perceive, to_state
 from afford.objects.state import N_SLOTS, posture
-from afford.shipped import load_object_perception
+from afford.shipped import Nets
 from afford.sim.camera import world_to_pixel
 from afford.sim.scene import ObjectSpec as O
 
 
 @pytest.fixture(scope="module")
 def net():
-    return load_object_perception()
+    return Nets().perception
 
 
 def seen(net, scene):

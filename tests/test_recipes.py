@@ -213,25 +213,38 @@ def test_weights_info_on_a_file_that_is_not_afford_weights_is_one_line(tmp_path,
     assert "not an afford weights file" in (main(["weights", "info", str(bare)]), capsys.readouterr().err)[1]
 
 
-def test_weights_export_writes_the_run_with_its_files_recipe(tmp_path, capsys):
+def test_weights_export_writes_a_run_as_a_file_of_the_layout_with_its_recipe_only_from_its_run(
+    tmp_path, capsys, monkeypatch
+):
     from afford.prediction.config import PRESETS
     from afford.prediction.evaluate import load_net
     from afford.prediction.model import PredictionNet
     from afford.training.checkpoint import save_checkpoint
 
+    monkeypatch.chdir(tmp_path)  # the recipe's run, runs/place, is relative to where make runs
     config = with_fields(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
-    save_checkpoint(
-        tmp_path / "run" / "best.safetensors", PredictionNet(config), "prediction", asdict(config), 1
-    )
-    (tmp_path / "run" / "calibration.json").write_text(json.dumps({"choice_scale": 0.5, "choice_bias": -1.0}))
-    argv = ["weights", "export", "ensemble/prediction-2.safetensors", "--run", str(tmp_path / "run")]
-    assert main([*argv, "--out", str(tmp_path / "w")]) == 0
+    for run in ("runs/place", "mine"):
+        save_checkpoint(
+            Path(run) / "best.safetensors", PredictionNet(config), "prediction", asdict(config), 1
+        )
+        (Path(run) / "calibration.json").write_text(json.dumps({"choice_scale": 0.5, "choice_bias": -1.0}))
+    member = ["weights", "export", "ensemble/prediction-2.safetensors"]
+    assert main([*member, "--run", "runs/place", "--out", "w"]) == 0
     out = tmp_path / "w" / "ensemble" / "prediction-2.safetensors"
     assert read_recipe(read_metadata(out)) == recipe_record(RECIPES["ensemble/prediction-2.safetensors"])
     _, loaded = load_net(out)
     assert (loaded.outcomes.choice_scale, loaded.outcomes.choice_bias) == (0.5, -1.0)
-    assert main(["weights", "export", "nope.safetensors", "--run", str(tmp_path / "run"), "--out", "x"]) == 2
-    assert "no recipe for 'nope.safetensors'" in capsys.readouterr().err
+    # another run: the same file, and no shipped recipe claimed for it
+    assert main([*member, "--run", "mine", "--out", "other"]) == 0
+    assert read_recipe(read_metadata(tmp_path / "other" / "ensemble" / "prediction-2.safetensors")) is None
+    assert (
+        main(["weights", "export", "ensemble/prediction-7.safetensors", "--run", "mine", "--out", "w"]) == 0
+    )
+    capsys.readouterr()
+    assert main(["weights", "export", "nope.safetensors", "--run", "mine", "--out", "x"]) == 2
+    assert "not a file of the weights layout" in capsys.readouterr().err
+    assert main(["weights", "export", "recognition.safetensors", "--run", "mine", "--out", "x"]) == 2
+    assert "holds a recognition net" in capsys.readouterr().err
 
 
 # ------------------------------------------------------------------ afford weights make's stages

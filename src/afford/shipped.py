@@ -1,93 +1,164 @@
-"""The shipped nets: where a weights folder keeps them, and how they load.
+"""The nets a planner or an evaluation uses: one bundle, from one weights folder.
 
-Package-level, below the planners and the evaluations that use them: `afford plan`, `afford
-eval`, the benchmarks and the tests all load the nets through `load_learned`.
+A weights folder holds the nets in the package's own layout (`afford weights export` writes
+each file there): recognition.safetensors, prediction.safetensors and the ensemble's members in
+ensemble/, agreement.safetensors (goals in words), and the object world model's
+objects/perception.safetensors and objects/dynamics.safetensors. A folder of training runs
+(recognition/ and prediction/, each with best.safetensors) serves for the first two. `Nets`
+loads each net on first use, so a planner loads only what it needs and a closed loop, which
+builds its world model every round, loads nothing twice. A net the folder lacks is a one-line
+error naming the file when it is first needed, never a net taken from elsewhere.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
-from afford.prediction.ensemble import check_members, member_paths
-from afford.prediction.evaluate import load_net as load_prediction
-from afford.prediction.model import PredictionNet
-from afford.recognition.infer import Recognizer, load_net, read_threshold
+from afford.errors import UserError
 from afford.training.checkpoint import BEST
 
 WEIGHTS = Path(__file__).resolve().parent / "weights"  # shipped with the package
 RECOGNITION_FILE = "recognition.safetensors"
 PREDICTION_FILE = "prediction.safetensors"
-AGREEMENT_FILE = "agreement.safetensors"  # goal sentences (words/), beside the two nets
-# A prediction net trained on continuous turns (paper V) for `--optimise-turns`, with the shipped
-# recognition net: shipped apart because training on them cost the main net quarter-turn tasks.
-CONTINUOUS = WEIGHTS / "continuous"
-# The object world model's nets (afford.objects): perception (E) and dynamics (P^a).
-OBJECTS = WEIGHTS / "objects"
-PERCEPTION_FILE = "perception.safetensors"
-DYNAMICS_FILE = "dynamics.safetensors"
+AGREEMENT_FILE = "agreement.safetensors"  # goals in words (words/)
+MEMBERS_DIR = "ensemble"  # the ensemble planner's prediction nets beside the folder's own
+OBJECTS_DIR = "objects"  # the object world model's nets (afford.objects)
+PERCEPTION_FILE = "perception.safetensors"  # in OBJECTS_DIR: E over objects
+DYNAMICS_FILE = "dynamics.safetensors"  # in OBJECTS_DIR: P^a over objects
+OBJECTS = WEIGHTS / OBJECTS_DIR
+# A prediction net trained on continuous turns (paper V) for `--optimise-turns`, planned with
+# the shipped recognition net: shipped apart because training on them cost the main net
+# quarter-turn tasks.
+CONTINUOUS_PREDICTION = WEIGHTS / "continuous" / PREDICTION_FILE
+
+# The nets of a bundle, by the attribute that holds each (`Planner.needs` names them so).
+KINDS = ("recognizer", "predictor", "members", "perception", "dynamics", "agreement")
 
 
-def _object_net(weights: str | Path | None, name: str, fallback: bool) -> Path:
-    """A net's file in a weights folder; with fallback, the shipped one when the folder lacks it."""
-    path = Path(weights or OBJECTS) / name
-    return OBJECTS / name if fallback and not path.is_file() else path
+def kind_of(file: str) -> str | None:
+    """The kind of net a file of the weights layout holds (None: no file of the layout)."""
+    parts = Path(file).parts
+    if parts == (RECOGNITION_FILE,):
+        return "recognition"
+    if parts == (AGREEMENT_FILE,):
+        return "agreement"
+    if parts in ((OBJECTS_DIR, PERCEPTION_FILE), (OBJECTS_DIR, DYNAMICS_FILE)):
+        return Path(parts[1]).stem
+    if parts[-1] == PREDICTION_FILE and len(parts) <= 2 and parts[0] != OBJECTS_DIR:
+        return "prediction"  # the folder's own, or one shipped apart (continuous/)
+    if len(parts) == 2 and parts[0] == MEMBERS_DIR and parts[1].endswith(".safetensors"):
+        return "prediction"  # an ensemble member
+    return None
 
 
-def load_object_perception(weights: str | Path | None = None, fallback: bool = False):
-    """The object perception net from a weights folder (default: the shipped one)."""
-    from afford.objects.perception_train import load_perception
-
-    return load_perception(_object_net(weights, PERCEPTION_FILE, fallback))
+class NetsError(UserError):
+    """A weights folder without a net that is asked for; the message names the file."""
 
 
-def load_object_dynamics(weights: str | Path | None = None, fallback: bool = False):
-    """The object dynamics net (P^a over objects) from a weights folder (default: the shipped one)."""
-    from afford.objects.train import load_dynamics
+def agreement_net(path: str | Path):
+    """The agreement model of goal sentences in a checkpoint or weights file."""
+    from afford.training.checkpoint import load_net_from_checkpoint
+    from afford.words.config import AgreementConfig
+    from afford.words.model import AgreementNet
 
-    return load_dynamics(_object_net(weights, DYNAMICS_FILE, fallback))
+    return load_net_from_checkpoint(path, "agreement", AgreementConfig, AgreementNet)[0]
 
 
-def find_weights(weights: str | Path | None = None) -> tuple[Path, Path]:
-    """The recognition and prediction checkpoints in a folder (default: the shipped ones).
+class Nets:
+    """The nets of one weights folder (default: the package's), each loaded on first use.
 
-    A folder may also be a pair of training runs: recognition/ and prediction/ inside it, each
-    with best.safetensors.
+    `prediction`: a prediction net's file used in place of the folder's (`--optimise-turns`
+    plans with the continuous-turn net and the folder's other nets). Nets given by name
+    (`recognizer=`, `predictor=`, ...) are used as they are: a test's or a benchmark's own.
+    The object world model's renderer and the perceived-sim planner's second simulator are
+    made once per bundle too, for the same reason as its nets.
     """
-    root = Path(weights) if weights else WEIGHTS
-    # A folder inside the shipped one may hold a prediction net alone, and shares the recognition net.
-    shared = WEIGHTS if root.resolve().parent == WEIGHTS and not (root / RECOGNITION_FILE).exists() else root
-    flat = (shared / RECOGNITION_FILE, root / PREDICTION_FILE)
-    runs = (root / "recognition" / BEST, root / "prediction" / BEST)
-    for rec, pred in (flat, runs):
-        if rec.is_file() and pred.is_file():
-            return rec, pred
-    raise FileNotFoundError(
-        f"{root}: no weights ({RECOGNITION_FILE} and {PREDICTION_FILE}, or recognition/ and "
-        "prediction/ runs with best.safetensors)"
-    )
 
+    def __init__(self, folder: str | Path | None = None, prediction: str | Path | None = None, **given):
+        if unknown := set(given) - set(KINDS):
+            raise TypeError(f"Nets: no net called {', '.join(sorted(unknown))}")
+        self.folder = Path(folder) if folder is not None else WEIGHTS
+        self.prediction_file = Path(prediction) if prediction is not None else None
+        self.__dict__.update(given)  # a given net stands where its cached_property would load one
+        if "predictor" in given and "members" not in given:
+            self.members = (given["predictor"],)
 
-@dataclass
-class LearnedNets:
-    """The trained nets of a weights folder."""
+    def __repr__(self) -> str:
+        return f"Nets({str(self.folder)!r})"
 
-    recognizer: Recognizer  # with its tuned cut-off
-    predictor: PredictionNet
-    # The prediction nets of the ensemble planner (prediction/ensemble.py): the predictor
-    # first, then the folder's ensemble/ members; just the predictor when it has none.
-    members: tuple[PredictionNet, ...] = ()
+    def path(self, *names: str, run: str | None = None) -> Path:
+        """A net's file in the folder (`names` joined under it), or its training run's
+        best.safetensors (`run`: the run's folder name); NetsError where neither is there."""
+        flat = self.folder.joinpath(*names)
+        if flat.is_file():
+            return flat
+        if run is not None and (self.folder / run / BEST).is_file():
+            return self.folder / run / BEST
+        where = f"{'/'.join(names)}" + (f" (or a {run}/ run with {BEST})" if run else "")
+        raise NetsError(
+            f"{self.folder}: no {where}; a weights folder holds the nets in the package's layout "
+            f"(`afford weights export`), e.g. copied from {WEIGHTS}"
+        )
 
+    def check(self, kinds) -> None:
+        """Load the nets named (KINDS) now: a folder that lacks one says so before any planning."""
+        for kind in kinds:
+            getattr(self, kind)
 
-def load_learned(weights: str | Path | None = None) -> LearnedNets:
-    """The recognizer, the prediction net and the ensemble's members from a weights folder
-    (default: the shipped one)."""
-    rec_path, pred_path = find_weights(weights)
-    net, config, meta = load_net(rec_path)
-    threshold = meta.get("extra", {}).get("threshold")  # set by `afford export`
-    if threshold is None:
-        threshold = read_threshold(rec_path.parent)  # tuned by `afford eval recognition`
-    predictor, _ = load_prediction(pred_path)
-    members = [predictor] + [load_prediction(p)[0].eval() for p in member_paths(pred_path.parent)]
-    check_members(members)
-    return LearnedNets(Recognizer(net, config, threshold), predictor, tuple(members))
+    @cached_property
+    def recognizer(self):
+        from afford.recognition.infer import load_recognizer
+
+        return load_recognizer(self.path(RECOGNITION_FILE, run="recognition"))
+
+    @cached_property
+    def predictor(self):
+        from afford.prediction.evaluate import load_net
+
+        path = self.prediction_file or self.path(PREDICTION_FILE, run="prediction")
+        if not path.is_file():
+            raise NetsError(f"{path}: no such prediction net")
+        return load_net(path)[0]
+
+    @cached_property
+    def members(self) -> tuple:
+        """The ensemble planner's prediction nets: the folder's own first, then its ensemble/
+        (a prediction net given apart has none beside it)."""
+        from afford.prediction.ensemble import check_members
+        from afford.prediction.evaluate import load_net
+
+        others = [] if self.prediction_file else sorted((self.folder / MEMBERS_DIR).glob("*.safetensors"))
+        members = [self.predictor, *(load_net(p)[0] for p in others)]
+        check_members(members)
+        return tuple(members)
+
+    @cached_property
+    def perception(self):
+        from afford.objects.perception_train import load_perception
+
+        return load_perception(self.path(OBJECTS_DIR, PERCEPTION_FILE))
+
+    @cached_property
+    def dynamics(self):
+        from afford.objects.train import load_dynamics
+
+        return load_dynamics(self.path(OBJECTS_DIR, DYNAMICS_FILE))
+
+    @cached_property
+    def agreement(self):
+        return agreement_net(self.path(AGREEMENT_FILE))
+
+    @cached_property
+    def drawer(self):
+        """The object world model's D: the simulator's renderer, drawing objects where they lie."""
+        from afford.objects.draw import Drawer
+
+        return Drawer()
+
+    @cached_property
+    def simulator(self):
+        """A second simulator, where the perceived-sim planner builds the scenes it searches."""
+        from afford.sim.scene import Scene
+
+        return Scene()

@@ -1,4 +1,4 @@
-"""`afford train recognition|prediction`, `afford eval recognition|prediction|futures`, `afford export`."""
+"""`afford train recognition|prediction`, `afford eval recognition|prediction|futures`."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ from pathlib import Path
 
 from afford.cli import objects, words
 from afford.cli.errors import CLIError
-from afford.cli.options import add_weights_argument, load_nets
+from afford.cli.options import add_weights_argument
+from afford.shipped import Nets
 from afford.training.checkpoint import BEST
 
 
@@ -82,23 +83,20 @@ def cmd_eval(args) -> int:
 
         if args.run is None:
             folder = Path(args.out)
-            result = evaluate_shipped(load_nets(None).recognizer, args.data, folder)
+            result = evaluate_shipped(Nets().recognizer, args.data, folder)
         else:
             _check_run(args.run)
             result, folder = evaluate(args.run, args.data, checkpoint=args.checkpoint), Path(args.run)
     elif args.objects is not None:
         from afford.objects.rollout import ObjectRollout
         from afford.prediction.evaluate import evaluate_world, format_table
-        from afford.shipped import OBJECTS, load_object_dynamics, load_object_perception
 
-        source = OBJECTS if args.objects == "shipped" else Path(args.objects)
-        world = ObjectRollout(
-            load_object_perception(source, fallback=True), load_object_dynamics(source, fallback=True)
-        )
+        nets = Nets(None if args.objects == "shipped" else args.objects)
+        world = ObjectRollout(nets.perception, nets.dynamics)
         folder = Path(args.out)
-        recognizer = None if args.no_futures else load_nets(args.recognition).recognizer
+        recognizer = None if args.no_futures else Nets(args.recognition).recognizer
         result = evaluate_world(
-            world, f"objects ({source})", args.data, folder / EVALS[args.net][1], recognizer
+            world, f"objects ({nets.folder})", args.data, folder / EVALS[args.net][1], recognizer
         )
     else:
         from afford.prediction.evaluate import evaluate, format_table
@@ -113,7 +111,7 @@ def cmd_eval(args) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         recognizer = None
         if not args.no_futures:
-            recognizer = load_nets(args.recognition).recognizer
+            recognizer = Nets(args.recognition).recognizer
         result = evaluate(checkpoint, args.data, pictures=folder / EVALS[args.net][1], recognizer=recognizer)
         if "choice_head" in result:  # the head's calibration, for export
             from afford.prediction.calibration import CALIBRATION_FILE, format_calibration
@@ -144,7 +142,7 @@ def cmd_futures(args) -> int:
     from afford.data.format import Dataset
     from afford.prediction.futures import BASELINES, format_report, future_recalls, net_predictor, pictures
 
-    nets = load_nets(args.weights)
+    nets = Nets(args.weights)
     recognizer, net = nets.recognizer, nets.predictor
     torch.set_num_threads(net.config.training.threads)
     data = Dataset(args.data)
@@ -163,53 +161,6 @@ def _check_run(run: str) -> None:
 
     if not Path(run).is_dir():
         raise CLIError(f"{run}: no such run folder (make one with `afford train ...`)")
-
-
-def cmd_export(args) -> int:
-    """Ship a trained pair: weights only, the tuned cut-off inside (and a two-outcome prediction
-    net's head calibration, RUN/calibration.json, in its config, as each member's). The
-    prediction net goes in float16 (half the size, the same predictions to the eye); the
-    recognition net stays in float32, since float16 moved detections across the cut-off (one
-    of 797 on the train states, a recall of 0.9699 instead of 0.9711) and it is only 1.6 MiB."""
-    from afford.prediction.calibration import read_calibration
-    from afford.prediction.config import PredictionConfig
-    from afford.prediction.ensemble import MEMBERS_DIR
-    from afford.recognition.infer import read_threshold
-    from afford.shipped import PREDICTION_FILE, RECOGNITION_FILE
-    from afford.training.checkpoint import export_weights
-
-    rec_run, pred_run = Path(args.recognition), Path(args.prediction)
-    members = [Path(m) for m in args.member or ()]
-    for run in (rec_run, pred_run, *members):
-        _check_run(str(run))
-    threshold = read_threshold(rec_run)
-    extra = {} if threshold is None else {"threshold": threshold, "tuned_on": "val"}
-    out = Path(args.out)
-    sizes = {
-        RECOGNITION_FILE: export_weights(
-            rec_run / args.checkpoint, out / RECOGNITION_FILE, "recognition", half=False, extra=extra
-        ),
-        PREDICTION_FILE: export_weights(
-            pred_run / args.checkpoint,
-            out / PREDICTION_FILE,
-            "prediction",
-            config=read_calibration(pred_run),
-            config_cls=PredictionConfig,
-        ),
-    }
-    for k, run in enumerate(members, start=1):
-        name = f"{MEMBERS_DIR}/prediction-{k}.safetensors"
-        (out / MEMBERS_DIR).mkdir(parents=True, exist_ok=True)
-        sizes[name] = export_weights(
-            run / args.checkpoint,
-            out / name,
-            "prediction",
-            config=read_calibration(run),
-            config_cls=PredictionConfig,
-        )
-    for name, size in sizes.items():
-        print(f"{out / name}: {size / 2**20:.1f} MiB")
-    return 0
 
 
 def _preset_names() -> dict[str, tuple[str, ...]]:
@@ -306,7 +257,7 @@ def add_parsers(sub) -> None:
         "sequences, beside copying the input. Writes Fig. 7-style pictures of canonical and non-canonical "
         "effects to RUN/predictions/. For a net with a side-effect outcome, also its choice head: how "
         "often it expects a side effect against how often one follows, and Platt scaling fitted on val "
-        "(RUN/calibration.json, which `afford export` puts in the shipped net's config).",
+        "(RUN/calibration.json, which `afford weights export` puts in the exported net's config).",
     )
     for q, name in ((r, "recognition"), (p, "prediction")):
         q.add_argument(
@@ -326,9 +277,9 @@ def add_parsers(sub) -> None:
         nargs="?",
         const="shipped",
         metavar="DIR",
-        help="evaluate the object world model (perception.safetensors and dynamics.safetensors in DIR, "
-        "a net missing from DIR: the shipped one; dynamics members in DIR/ensemble/ judged together; "
-        "without DIR the shipped ones) instead of a prediction net, on the same measures",
+        help="evaluate the object world model (the perception and dynamics nets of the weights folder DIR, "
+        "objects/perception.safetensors and objects/dynamics.safetensors; without DIR the shipped ones) "
+        "instead of a prediction net, on the same measures",
     )
     f = esub.add_parser(
         "futures",
@@ -355,24 +306,3 @@ def add_parsers(sub) -> None:
         q.set_defaults(func=cmd_eval)
     words.add_eval_parser(esub)
     objects.add_eval_parser(esub)
-
-    x = sub.add_parser(
-        "export",
-        help="write a trained recognition + prediction pair as shippable weights",
-        description="Write the weights of a recognition run and a prediction run (no optimiser state, "
-        "recognition in float32 and prediction in float16, the recognition cut-off tuned by `afford eval "
-        "recognition` inside) to a folder that "
-        "`afford plan --planner learned --weights DIR` reads. The package ships such a folder.",
-    )
-    x.add_argument("--recognition", required=True, metavar="RUN")
-    x.add_argument("--prediction", required=True, metavar="RUN")
-    x.add_argument(
-        "--member",
-        action="append",
-        metavar="RUN",
-        help="a prediction run to ship as a member of the ensemble planner's ensemble (beside --prediction); "
-        "repeat for more",
-    )
-    x.add_argument("--checkpoint", default=BEST, help=f"file in each RUN (default {BEST})")
-    x.add_argument("--out", required=True, metavar="DIR")
-    x.set_defaults(func=cmd_export)

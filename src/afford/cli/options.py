@@ -11,50 +11,18 @@ MAX_NODES_HELP = (
 
 
 def add_weights_argument(parser, detail: bool = False) -> None:
-    """--weights: the learned planners' nets (default: the ones shipped in the package)."""
+    """--weights: the folder of every net the planners use (default: the package's)."""
     parser.add_argument(
         "--weights",
         "--run-dir",
         metavar="DIR",
-        help="a folder with recognition.safetensors and prediction.safetensors, or with recognition/ and "
-        "prediction/ training runs (default: the weights shipped in the package)"
+        help="a weights folder in the package's layout (recognition.safetensors, prediction.safetensors, "
+        "ensemble/, agreement.safetensors, objects/perception.safetensors and objects/dynamics.safetensors, "
+        "as `afford weights export` writes them), or with recognition/ and prediction/ training runs; "
+        "the planners load the nets they need from it (default: the weights shipped in the package)"
         if detail
-        else "learned planners' weights (see afford plan)",
+        else "the planners' weights folder (see afford plan)",
     )
-
-
-def add_objects_weights_argument(parser) -> None:
-    """--objects-weights: the object world model's nets (default: the ones shipped in the package)."""
-    parser.add_argument(
-        "--objects-weights",
-        metavar="DIR",
-        help="objects, hybrid-objects and perceived-sim planners (and diagnose --planner objects): a "
-        "folder with perception.safetensors and/or "
-        "dynamics.safetensors (as `afford weights export objects/...` writes them), and more dynamics "
-        "nets in its ensemble/ to judge together with it; a net the folder lacks is the shipped one "
-        "(default: both shipped)",
-    )
-
-
-def objects_folder(args) -> str | None:
-    """The --objects-weights folder, checked to hold at least one object net; None: the shipped."""
-    from pathlib import Path
-
-    from afford.shipped import DYNAMICS_FILE, PERCEPTION_FILE
-
-    folder = getattr(args, "objects_weights", None)
-    if folder is None:
-        return None
-
-    def holds_a_net(path: Path) -> bool:
-        return any((path / name).is_file() for name in (PERCEPTION_FILE, DYNAMICS_FILE))
-
-    path = Path(folder)
-    if not holds_a_net(path) and (path / "objects").is_dir():
-        path = path / "objects"  # the folder `afford weights export` was given
-    if not holds_a_net(path):
-        raise CLIError(f"--objects-weights {folder}: no {PERCEPTION_FILE} or {DYNAMICS_FILE} in it")
-    return str(path)
 
 
 def output_folder(path):
@@ -70,25 +38,26 @@ def output_folder(path):
     return out
 
 
-def nets_folder(args) -> str | None:
-    """The weights folder a planning command asked for: `--weights`, or with `--optimise-turns`
-    alone the shipped continuous-turn prediction net's (paper V); None: the shipped nets."""
-    if args.weights is None and getattr(args, "optimise_turns", False):
-        from afford.shipped import CONTINUOUS
+def nets_of(args, planners: tuple[str, ...] = ()):
+    """The bundle of nets a command plans or measures with (`shipped.Nets`): the --weights
+    folder's (default: the package's), and with --optimise-turns alone the continuous-turn
+    prediction net in place of the package's (paper V). The nets `planners` need are loaded
+    here (`load_needs`)."""
+    from afford.shipped import CONTINUOUS_PREDICTION, Nets
 
-        return str(CONTINUOUS)
-    return args.weights
+    weights = getattr(args, "weights", None)
+    turns = weights is None and getattr(args, "optimise_turns", False)
+    return load_needs(Nets(weights, CONTINUOUS_PREDICTION if turns else None), planners)
 
 
-def load_nets(weights: str | None):
-    """The trained nets of a weights folder (None: the ones shipped in the package); one line
-    if it holds none."""
-    from afford.shipped import load_learned
+def load_needs(nets, planners: tuple[str, ...]):
+    """The bundle with the nets `planners` need loaded: a folder that lacks one says so in one
+    line before any planning."""
+    from afford.planning.run import PLANNER_REGISTRY
 
-    try:
-        return load_learned(weights)
-    except FileNotFoundError as e:
-        raise CLIError(str(e)) from None
+    for name in planners:
+        nets.check(PLANNER_REGISTRY[name].needs)
+    return nets
 
 
 def planners_help() -> str:
@@ -279,5 +248,4 @@ def planner_config(args, progress: bool):
         risk=args.risk,
         closed_loop=args.closed_loop,
         outcomes=args.outcomes,
-        objects_weights=objects_folder(args),
     )

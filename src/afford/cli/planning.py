@@ -10,15 +10,13 @@ from pathlib import Path
 
 from afford.cli.errors import CLIError
 from afford.cli.options import (
-    add_objects_weights_argument,
     add_perturb_arguments,
     add_search_arguments,
     add_time_limit_argument,
     add_weights_argument,
     check_closed_loop,
-    load_nets,
-    nets_folder,
-    objects_folder,
+    load_needs,
+    nets_of,
     output_folder,
     planner_config,
     planners_help,
@@ -35,8 +33,7 @@ def _outcome_line(o) -> str:
 
 def cmd_plan(args) -> int:
     """Plan a task file, execute the plan in the simulator, draw it (paper Fig. 8)."""
-    from afford.planning.run import USES_NETS, execute_perturbed, solve
-    from afford.planning.sentence_goal import bind_weights
+    from afford.planning.run import execute_perturbed, solve
     from afford.planning.tasks import load_task, sentence_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
@@ -45,25 +42,25 @@ def cmd_plan(args) -> int:
     check_closed_loop(args, (args.planner,))
     reading = None  # how a --goal sentence was read
     scene = Scene()
+    nets = nets_of(args)
     if args.scene is not None:
         if not args.goal:
             raise CLIError("--scene needs --goal SENTENCE")
-        task = sentence_task(args.scene, args.goal, args.steps, scene)
+        task = sentence_task(args.scene, args.goal, args.steps, scene, nets)
         reading = goal_reading(args.goal, task.goal.statement, State.of_scene(scene))
         if not args.json:
             print(reading_line(reading), flush=True)
     else:
         if args.goal:
             raise CLIError("--goal goes with --scene; a task file holds its own goal")
-        task = load_task(args.task, scene)
-    bind_weights(task.goal, args.weights)
+        task = load_task(args.task, scene, nets)
     out = output_folder(args.out)
     perturbation = perturbation_of(args)
-    learned = load_nets(nets_folder(args)) if args.planner in USES_NETS else None
+    load_needs(nets, (args.planner,))
     config = planner_config(args, progress=not args.json)
-    outcome = solve(task, args.planner, scene, config, learned)
+    outcome = solve(task, args.planner, scene, config, nets)
     if perturbation is not None:
-        execute_perturbed(outcome, task, scene, perturbation, args.executions, config=config, learned=learned)
+        execute_perturbed(outcome, task, scene, perturbation, args.executions, config=config, nets=nets)
     picture = out / f"{task.name}-{args.planner}.png"
     plan_strip(outcome, task.goal, picture)
     record = outcome.to_dict() | {"picture": str(picture)} | ({"goal_read": reading} if reading else {})
@@ -95,8 +92,7 @@ def cmd_plan(args) -> int:
 
 def cmd_bench_tasks(args) -> int:
     """Every task of a folder with one planner: a table (paper IV.C, Fig. 8)."""
-    from afford.planning.run import USES_NETS, execute_perturbed, solve
-    from afford.planning.sentence_goal import bind_weights
+    from afford.planning.run import execute_perturbed, solve
     from afford.planning.tasks import load_task
     from afford.sim.scene import Scene
     from afford.viz.plan import plan_strip
@@ -111,23 +107,20 @@ def cmd_bench_tasks(args) -> int:
     planners = planner_names(args.planner)
     check_closed_loop(args, planners)
     perturbation = perturbation_of(args)
-    learned = load_nets(nets_folder(args)) if any(p in USES_NETS for p in planners) else None
+    nets = nets_of(args, planners)
     config = planner_config(args, progress=False)
     scene = Scene()
     report = {}
     for planner in planners:
         rows = []
         for folder, f in files:
-            task = load_task(f, scene)
-            bind_weights(task.goal, args.weights)
+            task = load_task(f, scene, nets)
             live = not args.json and sys.stdout.isatty()
             if live:
                 print(f"{task.name} ...", end="", flush=True)
-            o = solve(task, planner, scene, config, learned)
+            o = solve(task, planner, scene, config, nets)
             if perturbation is not None:
-                execute_perturbed(
-                    o, task, scene, perturbation, args.executions, config=config, learned=learned
-                )
+                execute_perturbed(o, task, scene, perturbation, args.executions, config=config, nets=nets)
             if args.out:
                 plan_strip(o, task.goal, Path(args.out) / f"{task.name}-{planner}.png")
             rows.append(o.to_dict() | {"folder": folder})
@@ -176,7 +169,6 @@ def cmd_bench_random(args) -> int:
     from tqdm import tqdm
 
     from afford.planning.random_bench import BenchSpec, run, summarise
-    from afford.planning.run import USES_NETS
 
     if args.n < 1:
         raise CLIError("--n must be at least 1")
@@ -188,13 +180,13 @@ def cmd_bench_random(args) -> int:
         raise CLIError("--min-steps must be at least 1 and at most --max-steps")
     planners = planner_names(args.planner)
     check_closed_loop(args, planners)
-    if any(p in USES_NETS for p in planners):
-        load_nets(nets_folder(args))  # a missing weights folder is one line here, not a worker's traceback
+    nets = nets_of(args, planners)  # a folder that lacks a net is one line here, not a worker's traceback
     threads = max(1, (os.cpu_count() or 1) // args.workers)
     spec = BenchSpec(
         max_steps=args.max_steps,
         planners=planners,
-        weights=nets_folder(args),
+        weights=args.weights,
+        prediction=None if nets.prediction_file is None else str(nets.prediction_file),
         time_limit=args.time_limit,
         threads=threads,
         min_steps=args.min_steps,
@@ -242,7 +234,6 @@ def cmd_diagnose(args) -> int:
 
     from afford.planning.diagnose import diagnose
     from afford.planning.outcome import PlannerConfig
-    from afford.planning.sentence_goal import bind_weights
     from afford.planning.tasks import load_task
     from afford.planning.tree import SearchConfig
     from afford.sim.scene import Scene
@@ -254,14 +245,13 @@ def cmd_diagnose(args) -> int:
         if not found:
             raise CLIError(f"{given}: no task files (*.json) there")
         files += found
-    learned = load_nets(args.weights)
-    config = PlannerConfig(search=SearchConfig(progress=False), objects_weights=objects_folder(args))
+    nets = nets_of(args, (args.planner,))
+    config = PlannerConfig(search=SearchConfig(progress=False))
     scene = Scene()
     out = []
     for f in tqdm(files, desc="diagnose", unit="task", disable=args.json or len(files) == 1):
-        task = load_task(f, scene)
-        bind_weights(task.goal, args.weights)
-        d = diagnose(task, scene, learned, config, args.planner)
+        task = load_task(f, scene, nets)
+        d = diagnose(task, scene, nets, config, args.planner)
         out.append(d.to_dict())
         if not args.json:
             tqdm.write(d.describe())
@@ -322,7 +312,6 @@ def add_parsers(sub) -> None:
         "closed loop: one tree per round",
     )
     add_perturb_arguments(pl)
-    add_objects_weights_argument(pl)
     add_weights_argument(pl, detail=True)
     add_time_limit_argument(pl)
     add_search_arguments(pl)
@@ -337,7 +326,6 @@ def add_parsers(sub) -> None:
         "solved / plan / plan length / nodes / planning seconds per task.",
     )
     bt.add_argument("--planner", default="oracle", metavar="NAME[,NAME]|all", help=planners_help())
-    add_objects_weights_argument(bt)
     add_weights_argument(bt)
     bt.add_argument(
         "--tasks",
@@ -366,7 +354,6 @@ def add_parsers(sub) -> None:
     br.add_argument("--max-steps", type=int, default=4)
     br.add_argument("--min-steps", type=int, default=1, help="fewest random executions a goal is made of")
     br.add_argument("--planner", default="all", metavar="NAME[,NAME]|all", help=planners_help())
-    add_objects_weights_argument(br)
     add_weights_argument(br)
     br.add_argument(
         "--workers",
@@ -406,7 +393,6 @@ def add_parsers(sub) -> None:
         help="whose world model the oracle's plan is replayed through: the EM*D nets' (learned, the "
         "default) or the object world model's (objects)",
     )
-    add_objects_weights_argument(dg)
     add_weights_argument(dg)
     dg.add_argument("--json", action="store_true")
     dg.set_defaults(func=cmd_diagnose)

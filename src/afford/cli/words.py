@@ -42,10 +42,8 @@ def cmd_train_goals(args) -> int:
 def cmd_eval_goals(args) -> int:
     import torch
 
-    from afford.training.checkpoint import load_net_from_checkpoint
-    from afford.words.config import AgreementConfig
+    from afford.shipped import agreement_net
     from afford.words.evaluate import evaluate, format_table
-    from afford.words.model import AgreementNet
 
     if args.run is None:
         from afford.shipped import AGREEMENT_FILE, WEIGHTS
@@ -55,8 +53,8 @@ def cmd_eval_goals(args) -> int:
         checkpoint, folder = Path(args.run) / args.checkpoint, Path(args.run)
         if not checkpoint.is_file():
             raise CLIError(f"{checkpoint}: no such checkpoint")
-    net, config, _ = load_net_from_checkpoint(checkpoint, "agreement", AgreementConfig, AgreementNet)
-    torch.set_num_threads(config.threads)
+    net = agreement_net(checkpoint)
+    torch.set_num_threads(net.config.threads)
     result = evaluate(net, args.data, args.predicted, progress=not args.json)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "goals.json").write_text(json.dumps(result, indent=2) + "\n")

@@ -28,6 +28,7 @@ from afford.planning.judge import execute_plan
 from afford.planning.run import WORLD_MODELS, Outcome, PlannerConfig, solve
 from afford.planning.tasks import Task
 from afford.planning.tree import Node, SearchConfig, edges
+from afford.shipped import Nets
 from afford.sim.scene import Scene
 
 CAUSES = ("solved", "oracle fails", "execution", "recognition", "goal", "prediction")
@@ -84,14 +85,14 @@ class Diagnosis:
 
 
 def diagnose(
-    task: Task, scene: Scene, learned, config: PlannerConfig | None = None, planner: str = "learned"
+    task: Task, scene: Scene, nets: Nets, config: PlannerConfig | None = None, planner: str = "learned"
 ) -> Diagnosis:
     """Plan `task` with `planner` (one of PLANNERS) and the oracle, then replay the oracle's
     plan through the planner's world model to name the cause of a failure (module docstring)."""
     if planner not in PLANNERS:
         raise ValueError(f"diagnose: planner {planner!r}; expected one of {', '.join(PLANNERS)}")
     config = config or PlannerConfig(search=SearchConfig(progress=False))
-    mine = solve(task, planner, scene, config, learned)
+    mine = solve(task, planner, scene, config, nets)
     chosen_true = float(task.goal.loss(mine.executed[-1][None])[0])
     if mine.success:  # nothing to explain, and no oracle tree to grow
         return Diagnosis(task.name, "solved", mine, None, chosen_true_loss=chosen_true, planner=planner)
@@ -99,7 +100,7 @@ def diagnose(
     if not oracle.success:
         return Diagnosis(task.name, "oracle fails", mine, oracle, [], chosen_true, planner)
     scene.reset(task.scene)
-    model = WORLD_MODELS[planner](scene, scene.observe(), config, learned)
+    model = WORLD_MODELS[planner](scene, scene.observe(), config, nets)
     truth = execute_plan(scene, task.scene, oracle.plan, task.success).images
     image, state = model.root()
     node = Node((), image, state)

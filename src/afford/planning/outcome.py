@@ -35,10 +35,6 @@ class PlannerConfig:
     # each step carries on the one its head finds likeliest; "expected", every outcome is kept
     # as a branch and a plan scores its expected eq. (5) (planning/branches.py).
     outcomes: str = "likeliest"
-    # The planners on objects (objects, hybrid-objects, perceived-sim): a folder whose
-    # perception.safetensors and dynamics.safetensors replace the shipped ones (each that it
-    # holds); None: the shipped.
-    objects_weights: str | None = None
 
 
 @dataclass

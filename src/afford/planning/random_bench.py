@@ -1,6 +1,6 @@
 """`afford bench random`: random tasks planned by every planner, over parallel workers.
 
-Each worker process owns a `Scene` (and the learned nets, loaded once) and takes task seeds
+Each worker process owns a `Scene` (and a bundle of nets, each loaded once) and takes task seeds
 in turn; the caller keeps the first `n` seeds that make a task, in seed order, so the set of
 tasks does not depend on the number of workers. The oracle's tree is bounded in time: past the
 limit it plans from the states grown so far (and the row says so). Success rates come with
@@ -17,7 +17,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from afford.planning.run import USES_NETS, PlannerConfig, solve
+from afford.planning.run import PlannerConfig, solve
+from afford.shipped import Nets
 
 Z95 = 1.959964  # two-sided 95% normal quantile
 ORACLE_BATCH = 8  # the oracle's predict batch: small, so its time limit is checked often
@@ -27,7 +28,8 @@ ORACLE_BATCH = 8  # the oracle's predict batch: small, so its time limit is chec
 class BenchSpec:
     max_steps: int
     planners: tuple[str, ...]
-    weights: str | None = None  # the learned planner's weights folder (None: shipped)
+    weights: str | None = None  # the planners' weights folder (None: the package's)
+    prediction: str | None = None  # a prediction net in place of the folder's (`shipped.Nets`)
     time_limit: float | None = 60.0  # seconds of tree search per task and planner
     threads: int = 1  # torch threads per worker
     min_steps: int = 1
@@ -58,10 +60,7 @@ def _init(spec: BenchSpec) -> None:
     torch.set_num_threads(spec.threads)
     _state["spec"] = spec
     _state["scene"] = Scene()
-    if any(p in USES_NETS for p in spec.planners):
-        from afford.shipped import load_learned
-
-        _state["learned"] = load_learned(spec.weights)
+    _state["nets"] = Nets(spec.weights, spec.prediction)
 
 
 def run_seed(seed: int) -> dict | None:
@@ -79,7 +78,7 @@ def run_seed(seed: int) -> dict | None:
         batch = ORACLE_BATCH if planner.endswith("oracle") else spec.planner.search.batch_size
         search = replace(spec.planner.search, progress=False, time_limit=spec.time_limit, batch_size=batch)
         config = replace(spec.planner, search=search)
-        o = solve(task, planner, scene, config, _state.get("learned"))
+        o = solve(task, planner, scene, config, _state["nets"])
         row[planner] = {
             "solved": o.success,
             "score": o.success_rate if o.success_rate is not None else float(o.success),

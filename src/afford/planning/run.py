@@ -22,7 +22,6 @@ from afford.planning.searches import (
     ensemble_search,
     learned_model,
     learned_search,
-    nets_or_shipped,
     objects_model,
     objects_search,
     oracle_search,
@@ -32,22 +31,23 @@ from afford.planning.symbolic import plan_symbolic
 from afford.planning.symbolic_outcome import solve_symbolic
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchResult, WorldModel
+from afford.shipped import Nets
 from afford.sim.affordances import Affordance
 from afford.sim.perturb import Perturbation, piles, reset_perturbed
 from afford.sim.scene import Scene
 
 
 def solve(
-    task: Task, planner: str, scene: Scene, config: PlannerConfig | None = None, learned=None
+    task: Task, planner: str, scene: Scene, config: PlannerConfig | None = None, nets: Nets | None = None
 ) -> Outcome:
-    """Plan `task` with `planner`; `learned`: the `LearnedNets` for the planners that use them
-    (None: the shipped ones)."""
+    """Plan `task` with `planner` and the nets of `nets` it needs (None: the package's)."""
     if planner not in PLANNER_REGISTRY:
         raise ValueError(f"unknown planner {planner!r}; expected one of {PLANNERS}")
     config = config or PlannerConfig()
+    nets = nets or Nets()
     if config.closed_loop:
-        return _solve_closed_loop(task, planner, scene, config, learned)
-    return PLANNER_REGISTRY[planner].solve(task, scene, config, learned)
+        return _solve_closed_loop(task, planner, scene, config, nets)
+    return PLANNER_REGISTRY[planner].solve(task, scene, config, nets)
 
 
 def execute_perturbed(
@@ -58,7 +58,7 @@ def execute_perturbed(
     executions: int,
     seed: int = 0,
     config: PlannerConfig | None = None,
-    learned=None,
+    nets: Nets | None = None,
 ) -> list[bool]:
     """`perturbed_successes` of the outcome's plan, recorded on the outcome, and returned.
     Planners plan on the task's start; the world then differs. With `config.closed_loop` the
@@ -66,7 +66,7 @@ def execute_perturbed(
     is after every step."""
     if config is not None and config.closed_loop:
         base = piles(scene, task.scene)
-        nets = _learned_for(PLANNER_REGISTRY[outcome.planner].needs, learned)
+        nets = nets or Nets()
         outcome.perturbed = []
         for k in range(executions):
             draw = np.random.default_rng([seed, k])  # the same draws as the open-loop executions
@@ -93,7 +93,7 @@ def perturbed_successes(
     ]
 
 
-def _symbolic(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+def _symbolic(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
     return solve_symbolic(task, scene)
 
 
@@ -101,15 +101,14 @@ class ClosedLoopError(UserError):
     """A planner that cannot re-plan from what it sees."""
 
 
-def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
     """Plan, execute the first action, observe, plan again (planning/closed_loop.py)."""
     if planner not in CLOSED_LOOP:
         raise ClosedLoopError(
             f"the {planner} planner has no world model to plan again from what it sees; "
             f"closed loop takes {', '.join(CLOSED_LOOP)}"
         )
-    learned = _learned_for(PLANNER_REGISTRY[planner].needs, learned)
-    loop, success = _closed_loop_run(task, planner, scene, config, learned, lambda: scene.reset(task.scene))
+    loop, success = _closed_loop_run(task, planner, scene, config, nets, lambda: scene.reset(task.scene))
     reason = "" if success else f"the success predicate ({task.success.describe()}) is false after the loop"
     last = loop.last.loss if loop.last is not None else (loop.steps[-1].search.loss if loop.steps else None)
     return Outcome(
@@ -130,11 +129,11 @@ def _solve_closed_loop(task: Task, planner: str, scene: Scene, config: PlannerCo
 
 
 def _closed_loop_run(
-    task: Task, planner: str, scene: Scene, config: PlannerConfig, learned, start
+    task: Task, planner: str, scene: Scene, config: PlannerConfig, nets: Nets, start
 ) -> tuple[Loop, bool]:
     """One loop from the state `start()` puts the scene in: the loop, and whether the task's
     check holds after it."""
-    plan_from = PLANNER_REGISTRY[planner].closed_loop(task, scene, config, learned)
+    plan_from = PLANNER_REGISTRY[planner].closed_loop(task, scene, config, nets)
     start()
     loop = closed_loop(scene, plan_from, task.max_steps)
     return loop, bool(task.success.holds(scene))
@@ -142,10 +141,10 @@ def _closed_loop_run(
 
 def _searcher(plan):
     """A closed-loop round for a planner that searches a tree: `plan(task, scene, config,
-    learned, steps_left)` from the scene's current state."""
+    nets, steps_left)` from the scene's current state."""
 
-    def make(task: Task, scene: Scene, config: PlannerConfig, learned):
-        return lambda steps: plan(task, scene, config, learned, steps)
+    def make(task: Task, scene: Scene, config: PlannerConfig, nets: Nets):
+        return lambda steps: plan(task, scene, config, nets, steps)
 
     return make
 
@@ -155,14 +154,14 @@ def _hybrid_rounds(make_model: Callable):
     round the world model checks, from the observed state, the rest of every proposal that
     began with the actions taken so far, and searches when it keeps none."""
 
-    def rounds(task: Task, scene: Scene, config: PlannerConfig, learned):
+    def rounds(task: Task, scene: Scene, config: PlannerConfig, nets: Nets):
         proposals = plan_symbolic(
             scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
         ).plans
         taken: list[Affordance] = []
 
         def plan_from(steps: int) -> SearchResult:
-            model = make_model(scene, scene.observe(), config, learned)
+            model = make_model(scene, scene.observe(), config, nets)
             rest = [
                 p[len(taken) :]
                 for p in proposals
@@ -179,7 +178,7 @@ def _hybrid_rounds(make_model: Callable):
 
 
 def _solve_hybrid(
-    task: Task, name: str, make_model: Callable, scene: Scene, config: PlannerConfig, learned
+    task: Task, name: str, make_model: Callable, scene: Scene, config: PlannerConfig, nets: Nets
 ) -> Outcome:
     """Canonical proposals checked by a world model (`make_model`), built on the scene reset
     to the task's start; search as the fallback (`hybrid.py`)."""
@@ -187,7 +186,7 @@ def _solve_hybrid(
         scene, task.scene, task.object_names(), task.success, task.max_steps, samples=PROPOSALS
     )
     scene.reset(task.scene)
-    model = make_model(scene, scene.observe(), config, learned)
+    model = make_model(scene, scene.observe(), config, nets)
     hybrid = plan_hybrid(model, task.goal, proposals.plans, task.max_steps, config.search, config.accept)
     outcome = _judge(task, name, hybrid.search, scene, source=hybrid.source)
     outcome.seconds += proposals.seconds
@@ -224,18 +223,18 @@ def _judge(task: Task, name: str, result: SearchResult, scene: Scene, source: st
 
 
 # A world model a plan can be checked or replayed with (hybrid planners, `diagnose.py`):
-# (scene, image seen, config, learned nets) -> WorldModel.
+# (scene, image seen, config, nets) -> WorldModel.
 WorldModelMaker = Callable[[Scene, np.ndarray, PlannerConfig, object], WorldModel]
-# A planner's closed-loop round maker: (task, scene, config, learned nets or None) ->
+# A planner's closed-loop round maker: (task, scene, config, nets) ->
 # plan_from(steps left) -> SearchResult, planning from the scene as it is (`closed_loop`).
 RoundMaker = Callable[[Task, Scene, PlannerConfig, object], Callable[[int], SearchResult]]
 
 
 @dataclass(frozen=True)
 class Planner:
-    """One planner: how it plans and is judged (`solve`: (task, scene, config, learned nets or
-    None) -> Outcome), the nets it needs (`shipped.LearnedNets`' and the object nets, by
-    name: none for the simulator's and the canonical planners), how it plans again from an
+    """One planner: how it plans and is judged (`solve`: (task, scene, config, nets) ->
+    Outcome), the nets of the bundle it needs (`shipped.KINDS`: none for the simulator's and
+    the canonical planners), how it plans again from an
     observed state (`closed_loop`; None: it cannot), and the world model it grows, for the
     hybrid planner built on it and `diagnose` (`world_model`; None: none to replay through)."""
 
@@ -246,25 +245,14 @@ class Planner:
     world_model: WorldModelMaker | None = None
 
 
-# Every net a planner may need, by the name `Planner.needs` gives it; the first three are
-# `shipped.LearnedNets`', the others the object world model's (PlannerConfig.objects_weights).
-NETS = ("recognition", "prediction", "members", "perception", "dynamics")
-LEARNED_NETS = NETS[:3]
-
-
-def _learned_for(needs: tuple[str, ...], learned):
-    """The learned nets a planner with these needs plans with (None: it needs none of them)."""
-    return nets_or_shipped(learned) if set(needs) & set(LEARNED_NETS) else None
-
-
 def _searching(name: str, plan_search, needs: tuple[str, ...], about: str, world_model=None) -> Planner:
     """A planner that searches a tree from the task's start (`plan_search(task, scene, config,
-    learned, steps)`), executed open loop and judged; in closed loop, the same search from
+    nets, steps)`), executed open loop and judged; in closed loop, the same search from
     each observed state."""
 
-    def solve_it(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+    def solve_it(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
         scene.reset(task.scene)
-        result = plan_search(task, scene, config, _learned_for(needs, learned), task.max_steps)
+        result = plan_search(task, scene, config, nets, task.max_steps)
         return _judge(task, name, result, scene)
 
     return Planner(solve_it, about, needs, _searcher(plan_search), world_model)
@@ -273,21 +261,21 @@ def _searching(name: str, plan_search, needs: tuple[str, ...], about: str, world
 def _hybrid(name: str, base: Planner, about: str) -> Planner:
     """Canonical proposals checked by `base`'s world model (paper V), in closed loop too."""
 
-    def solve_it(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
-        return _solve_hybrid(task, name, base.world_model, scene, config, _learned_for(base.needs, learned))
+    def solve_it(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
+        return _solve_hybrid(task, name, base.world_model, scene, config, nets)
 
     return Planner(solve_it, about, base.needs, _hybrid_rounds(base.world_model))
 
 
-def _ensemble(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+def _ensemble(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
     scene.reset(task.scene)
-    result = ensemble_search(task, scene, config, nets_or_shipped(learned), task.max_steps)
+    result = ensemble_search(task, scene, config, nets, task.max_steps)
     outcome = _judge(task, "ensemble", result, scene)
     outcome.spread = result.nodes[result.best].spread
     return outcome
 
 
-def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> Outcome:
+def _objects_true(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
     """The object world model's search started from the true objects, not the perceived ones."""
     from afford.data.draws import pose_array
     from afford.planning.objects_model import TrueStart
@@ -297,7 +285,7 @@ def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> O
     return _judge(
         task,
         "objects-true",
-        objects_search(task, scene, config, nets_or_shipped(learned), task.max_steps, start),
+        objects_search(task, scene, config, nets, task.max_steps, start),
         scene,
     )
 
@@ -305,23 +293,23 @@ def _objects_true(task: Task, scene: Scene, config: PlannerConfig, learned) -> O
 _LEARNED = _searching(
     "learned",
     learned_search,
-    ("recognition", "prediction"),
+    ("recognizer", "predictor"),
     "the paper's: affordances recognised in the EM*D net's predicted futures",
-    lambda scene, image, config, learned: learned_model(image, learned, config),
+    lambda scene, image, config, nets: learned_model(image, nets, config),
 )
 _ORACLE = _searching(
     "oracle",
     oracle_search,
     (),
     "the paper's search with the simulator as its world model",
-    lambda scene, image, config, learned: OracleModel(scene),
+    lambda scene, image, config, nets: OracleModel(scene),
 )
 _OBJECTS = _searching(
     "objects",
     objects_search,
-    ("recognition", "perception", "dynamics"),
+    ("recognizer", "perception", "dynamics"),
     "the object world model: objects perceived, moved by learned dynamics, drawn",
-    lambda scene, image, config, learned: objects_model(image, config, learned),
+    lambda scene, image, config, nets: objects_model(image, config, nets),
 )
 
 # Every planner, one record each; `afford plan`, `afford bench` and the pictures take their
@@ -335,7 +323,7 @@ PLANNER_REGISTRY: dict[str, Planner] = {
     "ensemble": Planner(
         _ensemble,
         "the learned planner on an ensemble of prediction nets, risk-averse (paper V)",
-        ("recognition", "members"),
+        ("recognizer", "members"),
         _searcher(ensemble_search),
     ),
     "perceived-sim": _searching(
@@ -351,13 +339,13 @@ PLANNER_REGISTRY: dict[str, Planner] = {
     "objects-true": Planner(
         _objects_true,
         "the object world model from the true objects: what perception costs",
-        ("recognition", "perception", "dynamics"),
+        ("recognizer", "perception", "dynamics"),
     ),
 }
 PLANNERS = tuple(PLANNER_REGISTRY)
 # The planners that can plan again from an observed state (`--closed-loop`).
 CLOSED_LOOP = tuple(name for name, p in PLANNER_REGISTRY.items() if p.closed_loop is not None)
-# The planners that load the learned nets (`shipped.LearnedNets`).
-USES_NETS = tuple(name for name, p in PLANNER_REGISTRY.items() if set(p.needs) & set(LEARNED_NETS))
+# The planners that load trained nets.
+USES_NETS = tuple(name for name, p in PLANNER_REGISTRY.items() if p.needs)
 # The planners with a world model to replay a plan through (`diagnose`): those that learn it.
 WORLD_MODELS = {name: p.world_model for name, p in PLANNER_REGISTRY.items() if p.world_model and p.needs}

@@ -13,42 +13,39 @@ the true poses after execution (`words/facts.py`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from afford.planning.goal import GoalError
+from afford.shipped import Nets, NetsError
 from afford.words.facts import State
 from afford.words.sentences import Statement
 
 PANEL_WIDTH = 128  # px: the sentence drawn where pictures show an image goal
 
 
-def load_agreement(weights: str | Path | None = None):
-    """The agreement model of a weights folder, else the shipped one."""
-    from afford.shipped import AGREEMENT_FILE, WEIGHTS
-    from afford.training.checkpoint import load_net_from_checkpoint
-    from afford.words.config import AgreementConfig
-    from afford.words.model import AgreementNet
+def load_agreement(weights=None):
+    """The agreement model of a weights folder's bundle (default: the package's)."""
+    return _agreement(Nets(weights))
 
-    path = Path(weights) / AGREEMENT_FILE if weights else WEIGHTS / AGREEMENT_FILE
-    if not path.is_file():
-        path = WEIGHTS / AGREEMENT_FILE
-    if not path.is_file():
+
+def _agreement(nets: Nets):
+    try:
+        return nets.agreement
+    except NetsError as e:
         raise GoalError(
-            f"no agreement model for goals in words: neither the --weights folder nor the package holds "
-            f"{AGREEMENT_FILE}; train one with `afford train goals` and copy its RUN/best.safetensors "
-            f"there as {AGREEMENT_FILE}"
-        )
-    return load_net_from_checkpoint(path, "agreement", AgreementConfig, AgreementNet)[0]
+            f"no agreement model for goals in words: {e}; train one with `afford train goals` and "
+            "export it there with `afford weights export agreement.safetensors`"
+        ) from None
 
 
 @dataclass
 class SentenceGoal:
     statement: Statement
     negative: bool = False  # a sentence says what should hold; negation is written in it
-    weights: str | Path | None = None
-    _net: object = field(default=None, repr=False)
+    # The bundle whose agreement model scores the sentence, the planner's (None: the package's,
+    # made on the first score).
+    nets: Nets | None = field(default=None, repr=False, compare=False)
 
     channels = "text"
 
@@ -58,9 +55,9 @@ class SentenceGoal:
 
     @property
     def net(self):
-        if self._net is None:
-            self._net = load_agreement(self.weights)
-        return self._net
+        if self.nets is None:
+            self.nets = Nets()
+        return _agreement(self.nets)
 
     def loss_torch(self, states):
         """-log P(the sentence holds) for torch states (B, C, H, W): eq. (4) minimises it."""
@@ -86,12 +83,6 @@ class SentenceGoal:
         from afford.viz.draw import text_patch
 
         return text_patch(self.text, PANEL_WIDTH)
-
-
-def bind_weights(goal, weights: str | Path | None) -> None:
-    """A sentence goal scores with the agreement model of `weights` (a folder), where it has one."""
-    if isinstance(goal, SentenceGoal):
-        goal.weights = weights
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ from afford.planning.goal import CHANNELS, Goal, GoalError
 from afford.planning.predicates import Predicate, PredicateError, parse
 from afford.planning.sentence_goal import SentenceGoal, StatementHolds
 from afford.planning.task_schema import TASK_FIELDS, fields_under
+from afford.shipped import Nets
 from afford.sim import camera as cam
 from afford.sim.scene import SceneError, read_json_file, specs_from_json
 from afford.words.facts import State
@@ -60,18 +61,21 @@ def object_names(specs) -> list[str]:
     return names
 
 
-def load_task(path: str | Path, scene=None) -> Task:
+def load_task(path: str | Path, scene=None, nets: Nets | None = None) -> Task:
     """Read and validate a task file. A goal given as a scene is rendered with `scene` (a
-    `Scene`, made here when not given)."""
+    `Scene`, made here when not given); a goal in words is scored by the agreement model of
+    `nets` (None: the package's)."""
     p = Path(path)
     obj = read_json_file(p, "task", TaskError)
     try:
-        return task_from_json(obj, base=p.parent, scene=scene, path=p)
+        return task_from_json(obj, base=p.parent, scene=scene, path=p, nets=nets)
     except (SceneError, PredicateError, GoalError) as e:
         raise TaskError(f"{p.name}: {e}") from None
 
 
-def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path | None = None) -> Task:
+def task_from_json(
+    obj: object, base: Path = Path("."), scene=None, path: Path | None = None, nets: Nets | None = None
+) -> Task:
     where = path.name if path else "task"
     if not isinstance(obj, dict):
         raise TaskError(f"{where}: expected a JSON object")
@@ -99,7 +103,7 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
         scene = Scene()
     scene.reset(specs, settle=False, where="scene.")  # validated: nothing off the table, sunk or overlapping
     if isinstance(obj["goal"], dict) and "text" in obj["goal"]:
-        goal, goal_scene, crop = _sentence_goal(obj["goal"], scene), None, None
+        goal, goal_scene, crop = _sentence_goal(obj["goal"], scene, nets), None, None
     else:
         goal, goal_scene, crop = _goal(obj["goal"], base, scene)
     return Task(
@@ -115,19 +119,22 @@ def task_from_json(obj: object, base: Path = Path("."), scene=None, path: Path |
     )
 
 
-def _sentence_goal(g: dict, scene) -> SentenceGoal:
+def _sentence_goal(g: dict, scene, nets: Nets | None) -> SentenceGoal:
     """A goal sentence, read against the start scene (its words and the objects it names)."""
     if set(g) != {"text"} or not isinstance(g["text"], str):
         raise TaskError("goal: a sentence goal is {'text': '...'} and nothing else")
     try:
-        return SentenceGoal(parse_sentence(g["text"], State.of_scene(scene)))
+        return SentenceGoal(parse_sentence(g["text"], State.of_scene(scene)), nets=nets)
     except SentenceError as e:
         raise TaskError(f"goal.text: {e}") from None
 
 
-def sentence_task(scene_path: str | Path, text: str, max_steps: int, scene=None) -> Task:
-    """A scene file and a goal sentence (`afford plan --scene S.json --goal TEXT`): success is
-    the sentence judged on the true poses after the plan."""
+def sentence_task(
+    scene_path: str | Path, text: str, max_steps: int, scene=None, nets: Nets | None = None
+) -> Task:
+    """A scene file and a goal sentence (`afford plan --scene S.json --goal TEXT`), scored by
+    the agreement model of `nets` (None: the package's): success is the sentence judged on the
+    true poses after the plan."""
     p = Path(scene_path)
     specs = specs_from_json(read_json_file(p, "scene", TaskError), "scene")
     if not 1 <= max_steps <= MAX_STEPS_LIMIT:
@@ -137,7 +144,7 @@ def sentence_task(scene_path: str | Path, text: str, max_steps: int, scene=None)
 
         scene = Scene()
     scene.reset(specs, settle=False, where="scene.")
-    goal = _sentence_goal({"text": text}, scene)
+    goal = _sentence_goal({"text": text}, scene, nets)
     members = State.of_scene(scene).members
     return Task(p.stem, "", specs, goal, max_steps, StatementHolds(goal.statement, members), p)
 

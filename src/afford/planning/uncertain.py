@@ -79,8 +79,8 @@ class EnsembleModel(WorldModel):
         if len(members) < 2:
             raise EnsembleError(
                 f"an ensemble needs at least 2 prediction nets, not "
-                f"{len(members)}: put the members in the weights folder's ensemble/ (`afford export "
-                "--member`), beside its prediction net"
+                f"{len(members)}: put the members in the weights folder's ensemble/ (`afford weights "
+                "export ensemble/NAME.safetensors`), beside its prediction net"
             )
         self.image = np.asarray(image, dtype=np.float32)
         self.recognizer = recognizer
@@ -153,7 +153,7 @@ class EnsembleBranchingModel(WorldModel):
             raise EnsembleError(
                 "an ensemble that keeps outcomes needs at least 2 prediction nets, or one that "
                 "foresees two outcomes per step: put the members in the weights folder's ensemble/ "
-                "(`afford export --member`), beside its prediction net"
+                "(`afford weights export ensemble/NAME.safetensors`), beside its prediction net"
             )
         self.recognizer = recognizer
         self.models = [BranchingModel(image, recognizer, m) for m in members]

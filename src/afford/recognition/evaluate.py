@@ -9,7 +9,7 @@ import numpy as np
 
 from afford.data.format import Dataset
 from afford.metrics import Tally
-from afford.recognition.infer import THRESHOLD_FILE, Recognizer
+from afford.recognition.infer import THRESHOLD_FILE, Recognizer, load_recognizer
 from afford.sim.affordance import Detection
 from afford.sim.affordances import TYPES
 from afford.training.checkpoint import BEST
@@ -76,7 +76,7 @@ def operating_point(rows: list[dict]) -> float:
 def evaluate(run: str | Path, data_dir: str | Path, pictures: int = 6, checkpoint: str = BEST) -> dict:
     """Tune a training run's cut-off on val (saved in the run), then Table 1."""
     run = Path(run)
-    recognizer = Recognizer.from_run(run, checkpoint)
+    recognizer = load_recognizer(run / checkpoint)
     data = Dataset(data_dir)
     threshold, sweep = tune_threshold(recognizer, data)
     recognizer.threshold = threshold

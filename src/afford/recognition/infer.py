@@ -14,7 +14,7 @@ from afford.recognition.config import RecognitionConfig
 from afford.recognition.model import RecognitionNet, fused_for_inference
 from afford.recognition.targets import decode, suppress
 from afford.sim.affordance import Detection
-from afford.training.checkpoint import LAST, load_net_from_checkpoint
+from afford.training.checkpoint import load_net_from_checkpoint
 
 KIND = "recognition"
 THRESHOLD_FILE = "threshold.json"  # written by `afford eval recognition` (tuned on val)
@@ -30,6 +30,17 @@ def load_net(path: str | Path) -> tuple[RecognitionNet, RecognitionConfig, dict]
     return load_net_from_checkpoint(path, KIND, RecognitionConfig, RecognitionNet)
 
 
+def load_recognizer(path: str | Path) -> Recognizer:
+    """The recognizer of a weights file or checkpoint, with its cut-off: the one export wrote
+    into the file, else the one tuned for its training run (`read_threshold`), else the
+    config's."""
+    net, config, meta = load_net(path)
+    threshold = meta.get("extra", {}).get("threshold")
+    if threshold is None:
+        threshold = read_threshold(Path(path).parent)
+    return Recognizer(net, config, threshold)
+
+
 class Recognizer:
     """Batched inference with the tuned cut-off and suppression (paper II.B)."""
 
@@ -38,11 +49,6 @@ class Recognizer:
         self.config = config
         self.threshold = config.confidence if threshold is None else threshold
 
-    @classmethod
-    def from_run(cls, run: str | Path, checkpoint: str = LAST) -> Recognizer:
-        run = Path(run)
-        net, config, _ = load_net(run / checkpoint)
-        return cls(net, config, read_threshold(run))
 
     @torch.no_grad()
     def raw(self, images: np.ndarray | torch.Tensor, batch_size: int = 256) -> torch.Tensor:

@@ -110,7 +110,7 @@ def other_than(noun: Noun, fits: list[int], said: set[int], subject: int | None,
     none (the scene has no other)."""
     near = set() if subject is None else {subject, *bearing(state, subject)}
     if subject is not None and isinstance(host(state, subject), int):
-        near.add(host(state, subject))  # type: ignore[arg-type]
+        near.add(host(state, subject))
     kept = [k for k in fits if k not in said | near]
     if len(kept) == len(fits):
         raise Unresolved(

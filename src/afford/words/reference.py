@@ -40,6 +40,7 @@ SAID = {
     "behind": "behind something",
 }
 QUANTITIES = {"both": 2, "two": 2, "three": 3}
+KINDS = ("cup", "ball", "support", "block")
 # The relation whose kinds a pseudo-relation (`derived.py`) is said of.
 STANDS_FOR = {"turn": "lies", "between": "left_of", "swap": "left_of"}
 SAID |= {"turn": "turned", "between": "between two objects", "swap": "swapped"}
@@ -271,7 +272,7 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
         others_said: list[int] = []
         known: dict[int, list[int]] = {}
         if not preds:  # "move the ball so that ...": named, for "it", and nothing asked of it
-            subjects_said += [k for k, _ in _slots(item.subjects, tuple(PLURALS)[:4], state, context)]
+            subjects_said += [k for k, _ in _slots(item.subjects, KINDS, state, context)]
         for pred in preds:
             relation = RELATIONS[STANDS_FOR.get(pred.relation, pred.relation)]
             subjects = _slots(item.subjects, relation.subjects, state, context, known=known)
@@ -311,12 +312,11 @@ def _pairs(
 ) -> list[tuple[str, object]]:
     """The clauses (relation, other) that `pred` makes of subject s: one per other argument,
     or those a scene-dependent phrase means at the start (`derived.py`)."""
-    name = _listed(state, [s])
     if pred.relation == "turn":
-        return [("lies", derived.turned(state, s, int(pred.other), noun.words))]  # type: ignore[arg-type]
+        return [("lies", derived.turned(state, s, int(pred.other), noun.words))]
     if pred.relation == "between":
-        ends = [k for n in pred.other for k in resolve(n, state, context)]  # type: ignore[union-attr]
-        return derived.between(state, ends, " and ".join(n.words for n in pred.other))  # type: ignore[union-attr]
+        ends = [k for n in pred.other for k in resolve(n, state, context)]
+        return derived.between(state, ends, " and ".join(n.words for n in pred.other))
     if pred.relation == "swap":
         partners = [k for k, _ in subjects if k != s]
         if len(subjects) != 2 or len(partners) != 1:
@@ -330,7 +330,7 @@ def _pairs(
         return [(pred.relation, derived.where(place, s, state, borne))]
     if pred.relation == "on_end" and pred.other == "other":
         _others(replace(pred, other="left"), s, state, context)  # the host is the block
-        return [("on_end", derived.other_end(state, s, name))]
+        return [("on_end", derived.other_end(state, s, _listed(state, [s])))]
     return [(pred.relation, other) for other in _others(pred, s, state, context)]
 
 

@@ -35,17 +35,17 @@ def test_a_two_step_plan_is_found_and_its_states_are_drawn(scene):
 
 def test_the_true_start_is_the_simulators_objects_and_plans_the_task(scene):
     from afford.data.draws import pose_array
-    from afford.planning.objects_model import TrueStart
+    from afford.objects.world import given
 
     task = load_task(TASK)
     scene.reset(task.scene)
     poses, mask = pose_array(scene), scene.instance_mask()
     nets = (NETS.recognizer, NETS.perception, NETS.dynamics, NETS.drawer)
-    model = ObjectsModel(scene.observe(), *nets, start=TrueStart(poses, -1, mask))
+    model = ObjectsModel(scene.observe(), *nets, start=given(NETS.drawer, poses, -1, mask))
     _, state = model.root()
     np.testing.assert_array_equal(state.poses, poses)
-    assert state.held == -1 and model.seen.shape[0] == len(poses)
-    np.testing.assert_array_equal(model.seen.any(0), mask >= 0)
+    assert state.held == -1 and state.seen.shape[0] == len(poses)
+    np.testing.assert_array_equal(state.seen.any(0), mask >= 0)
     outcome = solve(task, "objects-true", scene)
     assert outcome.success and [a.type for a in outcome.plan] == ["grasp", "place"]
 
@@ -140,7 +140,7 @@ def test_a_failure_is_diagnosed_through_the_object_world_model(scene):
 
 
 def test_outcomes_alike_are_one_branch_drawn_from_the_likeliest():
-    from afford.objects.dynamics import Outcomes
+    from afford.objects.dynamics import ObjectOutcomes
     from afford.planning.objects_model import _distinct
 
     upright = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
@@ -150,10 +150,32 @@ def test_outcomes_alike_are_one_branch_drawn_from_the_likeliest():
     poses[1, 0, 0, 0] = 0.0005  # row 1's first is row 0's first, half a millimetre off
     poses[1, 1, 0, 0] = 0.05
     poses[2, 0, 0, 3:7] = [0.0, 0.0, 0.0, 1.0]  # row 2 (another parent): the object turned
-    outcomes = Outcomes(poses, np.full((3, 2), -1), np.array([[0.9, 0.1], [0.3, 0.7], [0.5, 0.5]]))
+    outcomes = ObjectOutcomes(poses, np.full((3, 2), -1), np.array([[0.9, 0.1], [0.3, 0.7], [0.5, 0.5]]))
     found = _distinct(outcomes, range(0, 2), np.array([0.4, 0.6]))
     # 0.4 * 0.9 + 0.6 * 0.3 stay, 0.4 * 0.1 + 0.6 * 0.7 move; each drawn from its likeliest
     assert np.allclose([f.probability for f in found], [0.54, 0.46])
     assert [(f.row, f.outcome) for f in found] == [(0, 0), (1, 1)]
     found = _distinct(outcomes, range(0, 3), np.array([0.2, 0.3, 0.5]))
     assert len(found) == 3 and np.isclose(sum(f.probability for f in found), 1.0)
+
+
+def test_the_planner_and_the_rollout_take_the_same_object_step(scene):
+    """One step of the object world model (`objects/world.step`): the planner's child of an
+    action is the rollout's first predicted image of it, to the pixel."""
+    import torch
+
+    from afford.images import to_chw, to_hwc
+    from afford.objects.rollout import ObjectRollout
+    from afford.planning.tree import Node
+    from afford.sim.affordance import encode_affordance
+
+    task = load_task(TASK)
+    scene.reset(task.scene)
+    image = scene.observe()
+    action = next(a for a in scene.affordances() if a.type == "grasp")
+    model = ObjectsModel(image, NETS.recognizer, NETS.perception, NETS.dynamics, NETS.drawer)
+    start, state = model.root()
+    ((child, _),) = model.predict([Node((), start, state)], [action])
+    rows = torch.from_numpy(encode_affordance(action)[None, None])
+    rolled = ObjectRollout(NETS.perception, NETS.dynamics, NETS.drawer).rollout(to_chw(image[None]), rows)
+    np.testing.assert_array_equal(to_hwc(rolled[:, 0])[0], child)

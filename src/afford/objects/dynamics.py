@@ -148,7 +148,7 @@ class ObjectDynamics(nn.Module):
         self.config = config
         self.p = nn.ModuleDict({t: TypeDynamics(config) for t in TYPES})
 
-    def outcomes(self, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> Outcomes:
+    def outcomes(self, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> ObjectOutcomes:
         """`predict` with this net: what every world model's dynamics answer."""
         return predict(self, before, held, actions)
 
@@ -280,7 +280,7 @@ def mixture_loss(
 
 # ---------------------------------------------------------------------------- predicting
 @dataclass
-class Outcomes:
+class ObjectOutcomes:
     """K predicted next states of N executions: poses (N, K, slots, 7) (NaN: off the table),
     held slots (N, K) (-1: none), probabilities (N, K)."""
 
@@ -295,7 +295,7 @@ class Outcomes:
 
 
 @torch.no_grad()
-def predict(net: ObjectDynamics, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> Outcomes:
+def predict(net: ObjectDynamics, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> ObjectOutcomes:
     """Every outcome of N executions from their start states (eq. 2 on objects)."""
     net.eval()
     out = net(encode_inputs(before, held, actions))
@@ -316,4 +316,4 @@ def predict(net: ObjectDynamics, before: np.ndarray, held: np.ndarray, actions: 
     hp = np.where(was, held_p.transpose(0, 2, 1), 0.0)
     held_next = np.where(hp.max(-1) > 0.5, hp.argmax(-1), -1)
     probability = torch.softmax(out["outcome"] / net.config.outcome_temperature, -1).numpy()
-    return Outcomes(poses.astype(np.float32), held_next.astype(np.int64), probability)
+    return ObjectOutcomes(poses.astype(np.float32), held_next.astype(np.int64), probability)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from afford.data.effects import KINDS as EFFECT_KINDS
-from afford.objects.dynamics import ObjectDynamics, Outcomes
+from afford.objects.dynamics import ObjectDynamics, ObjectOutcomes
 from afford.objects.transitions import Transitions
 from afford.sim.affordances import TYPES
 from afford.sim.camera import world_to_pixel
@@ -53,8 +53,8 @@ def pixel_error(pred: np.ndarray, true: np.ndarray) -> np.ndarray:
     return np.where(gone, MISSING_PX, d)
 
 
-# A world model's dynamics: (start poses, held slots, affordance rows) -> Outcomes.
-Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray], Outcomes]
+# A world model's dynamics: (start poses, held slots, affordance rows) -> ObjectOutcomes.
+Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray], ObjectOutcomes]
 
 
 def simulator_predictor() -> Predictor:
@@ -66,7 +66,7 @@ def simulator_predictor() -> Predictor:
     return lambda before, held, actions: simulate(scene, before, held, actions)
 
 
-def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None = None) -> Outcomes:
+def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None = None) -> ObjectOutcomes:
     """Outcomes of every execution, from the true start states or from `before` (perceived)."""
     start = t.before if before is None else before
     parts = [
@@ -77,7 +77,7 @@ def predict_all(predictor: Predictor, t: Transitions, before: np.ndarray | None 
         )
         for i in range(0, len(t), CHUNK)
     ]
-    return Outcomes(
+    return ObjectOutcomes(
         *(np.concatenate([getattr(p, f) for p in parts]) for f in ("poses", "held", "probability"))
     )
 

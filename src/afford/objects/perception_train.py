@@ -10,7 +10,7 @@ import torch
 
 from afford.data.format import DataError, Dataset
 from afford.objects.perception import PerceptionConfig, PerceptionNet, fold_batch_norms, loss, targets
-from afford.training.loop import Loop, LoopState, run, warmup_cosine
+from afford.training.loop import LoopState, one_loss_loop, run
 
 KIND = "perception"
 VAL_IMAGES = 64
@@ -64,26 +64,11 @@ def train(
                 picks = rng.integers(0, len(train_items), config.batch)
                 yield batch_of(data, [train_items[i] for i in picks], config)
 
-    def train_step(batch):
+    def loss_of(batch):
         images, t = batch
         return loss(net(images), t)
 
-    def validate() -> dict[str, float]:
-        total, parts = loss(net(val_batch[0]), val_batch[1])
-        return {"loss": float(total), **parts}
-
-    loop = Loop(
-        kind=KIND,
-        config=config,
-        model=net,
-        optimizer=opt,
-        batches=Batches(),
-        train_step=train_step,
-        validate=validate,
-        lr_at=warmup_cosine(config.warmup, config.steps),
-        init=init,
-    )
-    return run(loop, run_dir, progress)
+    return run(one_loss_loop(KIND, config, net, opt, Batches(), loss_of, val_batch, init), run_dir, progress)
 
 
 def load_perception(path: str | Path) -> PerceptionNet:

@@ -15,9 +15,8 @@ import torch
 from afford.images import to_chw, to_hwc
 from afford.objects.draw import Drawer
 from afford.objects.dynamics import ObjectDynamics
-from afford.objects.perceive import perceive, slot_masks, to_state
 from afford.objects.perception import PerceptionNet
-from afford.objects.state import moved
+from afford.objects.world import perceived, step
 
 
 class ObjectRollout:
@@ -35,26 +34,16 @@ class ObjectRollout:
         start = to_hwc(images)
         rows = actions.numpy()
         b, length = rows.shape[:2]
-        seen = perceive(self.perception, start)
-        states = [to_state(objects) for objects in seen]
-        masks = np.stack([slot_masks(objects) for objects in seen])  # (B, slots, H, W)
-        as_seen = masks.any((2, 3))  # slots the image shows as seen: not yet moved
-        poses = np.stack([p for p, _ in states])
-        held = np.array([h for _, h in states])
-        drawn = [self.drawer.render(poses[k], int(held[k])) for k in range(b)]
+        states = perceived(self.perception, self.drawer, start)
         image = list(start)
         out = np.zeros((b, length, *start.shape[1:]), np.float32)
-        drawn_poses = np.zeros((b, length, *poses.shape[1:]), np.float32)
+        drawn_poses = np.zeros((b, length, *states[0].poses.shape), np.float32)
         for t in range(length):
-            before = poses
+            poses = np.stack([s.poses for s in states])
+            held = np.array([s.held for s in states])
             poses, held = self.dynamics.outcomes(poses, held, rows[:, t]).likeliest()
-            go = moved(before, poses)
-            poses = np.stack([self.drawer.rest(poses[k], int(held[k]), go[k]) for k in range(b)])
-            drawn_poses[:, t] = poses
             for k in range(b):
-                after = self.drawer.render(poses[k], int(held[k]))
-                image[k] = self.drawer.draw(image[k], drawn[k], after, masks[k][go[k] & as_seen[k]].any(0))
-                drawn[k] = after
+                image[k], states[k] = step(self.drawer, image[k], states[k], poses[k], int(held[k]))
+                drawn_poses[k, t] = states[k].poses
                 out[k, t] = image[k]
-            as_seen &= ~go
         return to_chw(out), drawn_poses

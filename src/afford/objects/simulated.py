@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from afford.objects.dynamics import Outcomes
+from afford.objects.dynamics import ObjectOutcomes
 from afford.objects.state import KINDS, N_SLOTS, SLOT_KIND
 from afford.sim.affordance import decode_affordance
 from afford.sim.scene import ObjectSpec, Scene
@@ -36,7 +36,7 @@ def scene_from_state(scene: Scene, poses: np.ndarray, held: int) -> None:
     scene.settle()
 
 
-def simulate(scene: Scene, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> Outcomes:
+def simulate(scene: Scene, before: np.ndarray, held: np.ndarray, actions: np.ndarray) -> ObjectOutcomes:
     """The next state of N executions, each run in `scene` from its start state: one outcome of
     probability 1 (an execution the arm cannot carry out leaves the state as it was)."""
     from afford.data.draws import pose_array
@@ -60,4 +60,4 @@ def simulate(scene: Scene, before: np.ndarray, held: np.ndarray, actions: np.nda
                 poses[i, s] = after[row]
             inverse = {row: s for s, row in named.items()}
             held_next[i] = inverse.get(slots.index(scene.held), -1) if scene.held else -1
-    return Outcomes(poses[:, None], held_next[:, None], np.ones((len(actions), 1)))
+    return ObjectOutcomes(poses[:, None], held_next[:, None], np.ones((len(actions), 1)))

@@ -25,7 +25,7 @@ from afford.objects.dynamics import (
 )
 from afford.objects.transitions import Transitions, read_transitions
 from afford.training.checkpoint import BEST
-from afford.training.loop import Loop, LoopState, run, warmup_cosine
+from afford.training.loop import LoopState, one_loss_loop, run
 
 KIND = "dynamics"
 VAL_EXECUTIONS = 2000  # per evaluation: enough to follow the loss, a second on a CPU
@@ -76,25 +76,11 @@ def train(
             for _ in range(max(1, len(train_set) // config.batch)):
                 yield batch_of(train_set, rng.integers(0, len(train_set), config.batch), config)
 
-    def train_step(batch):
+    def loss_of(batch):
         inputs, targets = batch
         return mixture_loss(net(inputs), targets, config.spread)
 
-    def validate() -> dict[str, float]:
-        loss, parts = mixture_loss(net(val_batch[0]), val_batch[1], config.spread)
-        return {"loss": float(loss), **parts}
-
-    loop = Loop(
-        kind=KIND,
-        config=config,
-        model=net,
-        optimizer=opt,
-        batches=Batches(),
-        train_step=train_step,
-        validate=validate,
-        lr_at=warmup_cosine(config.warmup, config.steps),
-        init=init,
-    )
+    loop = one_loss_loop(KIND, config, net, opt, Batches(), loss_of, val_batch, init)
     state = run(loop, run_dir, progress)
     (Path(run_dir) / "data.txt").write_text(
         "".join(f"{d}\n" for d in data_dirs) + f"training executions: {len(train_set)}\n"

@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from afford.metrics import matches
-from afford.planning.judge import execute_plan
 from afford.planning.run import WORLD_MODELS, Outcome, PlannerConfig, solve
 from afford.planning.tasks import Task
 from afford.planning.tree import Node, SearchConfig, edges
@@ -99,9 +98,10 @@ def diagnose(
     oracle = solve(task, "oracle", scene, config)
     if not oracle.success:
         return Diagnosis(task.name, "oracle fails", mine, oracle, [], chosen_true, planner)
-    scene.reset(task.scene)
-    model = WORLD_MODELS[planner](scene, scene.observe(), config, nets)
-    truth = execute_plan(scene, task.scene, oracle.plan, task.success).images
+    # The oracle's run already holds every true state of its plan, the start first: the replay
+    # starts from that start image and needs the simulator no more.
+    truth = oracle.executed
+    model = WORLD_MODELS[planner](scene, truth[0], config, nets)
     image, state = model.root()
     node = Node((), image, state)
     steps = []

@@ -4,8 +4,9 @@ The paper's search, unchanged: recognise affordances on each state image (the re
 paper II.B), predict each child, score the leaves with eq. (4) and (5) against the goal image.
 Only the prediction differs from `learned.py`: the start image is perceived as objects once,
 the dynamics move the objects (P^a over objects, the likeliest outcome carried on), and the
-child's image is drawn from its parent's (`objects/draw.py`), so landings stay sharp and
-every pixel nothing touched stays exactly the start's.
+child's image is drawn from its parent's (`objects/world.step`, the step the evaluations'
+rollout takes too), so landings stay sharp and every pixel nothing touched stays exactly the
+start's.
 
 `ObjectsBranchingModel` keeps every outcome the dynamics foresee instead of the likeliest (as
 `branches.py` does for the EM*D net): each state is a few branches, each its own objects and
@@ -21,10 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from afford.objects.draw import Drawer
-from afford.objects.dynamics import ObjectDynamics, Outcomes
-from afford.objects.perceive import perceive, slot_masks, to_state
+from afford.objects.dynamics import ObjectDynamics, ObjectOutcomes
 from afford.objects.perception import PerceptionNet
-from afford.objects.state import moved
+from afford.objects.world import ObjectState, perceived, step
 from afford.planning.branches import keep, risky_scores
 from afford.planning.goal import Goal
 from afford.planning.learned import recognise_nodes
@@ -39,29 +39,6 @@ SAME_M = 0.002
 SAME_DEG = 3.0
 
 
-@dataclass
-class ObjectsState:
-    """A node's objects: pose rows per slot (NaN: none), the held slot, the drawing of them
-    that the child's drawing is compared with, and which slots' objects the image still
-    shows as they were seen in the start image (not yet moved, so not yet redrawn)."""
-
-    poses: np.ndarray
-    held: int
-    drawn: np.ndarray
-    as_seen: np.ndarray
-
-
-@dataclass
-class TrueStart:
-    """The simulator's objects in the start image, to start from instead of the perceived ones
-    (`--planner objects-true`, a diagnostic: beside `objects`, what perception costs a plan):
-    pose rows per slot, the held slot (-1: none), the image's instance mask (slot per pixel)."""
-
-    poses: np.ndarray
-    held: int
-    mask: np.ndarray
-
-
 class ObjectsModel(WorldModel):
     def __init__(
         self,
@@ -70,8 +47,10 @@ class ObjectsModel(WorldModel):
         perception: PerceptionNet,
         dynamics: ObjectDynamics,
         drawer: Drawer | None = None,
-        start: TrueStart | None = None,
+        start: ObjectState | None = None,
     ):
+        """`start`: the objects to start from (`objects/world.given`) instead of the ones
+        perception sees in `image`."""
         self.image = np.asarray(image, dtype=np.float32)
         self.recognizer = recognizer
         self.perception = perception
@@ -80,14 +59,9 @@ class ObjectsModel(WorldModel):
         self.start = start
 
     def root(self):
-        if self.start is None:
-            objects = perceive(self.perception, self.image[None])[0]
-            poses, held = to_state(objects)
-            self.seen = slot_masks(objects)
-        else:
-            poses, held = np.asarray(self.start.poses, np.float32), int(self.start.held)
-            self.seen = np.stack([self.start.mask == slot for slot in range(len(poses))])
-        return self.image, ObjectsState(poses, held, self.drawer.render(poses, held), self.seen.any((1, 2)))
+        if self.start is not None:
+            return self.image, self.start
+        return self.image, perceived(self.perception, self.drawer, self.image[None])[0]
 
     def recognise(self, nodes: list[Node]) -> list[Recognised]:
         return recognise_nodes(self.recognizer, nodes)
@@ -98,19 +72,9 @@ class ObjectsModel(WorldModel):
         rows = np.stack([encode_affordance(a) for a in actions])
         poses, held_next = self.dynamics.outcomes(before, held, rows).likeliest()
         return [
-            self._child(parent.image, parent.state, poses[k], int(held_next[k]))
+            step(self.drawer, parent.image, parent.state, poses[k], int(held_next[k]))
             for k, parent in enumerate(parents)
         ]
-
-    def _child(self, image: np.ndarray, state: ObjectsState, poses: np.ndarray, held: int):
-        """(image, state) of the objects moved to `poses`, drawn over `image` (eq. 3); a moved
-        object sunk into what it landed on rests on it first (`Drawer.rest`)."""
-        go = moved(state.poses, poses)
-        poses = self.drawer.rest(poses, held, go)
-        drawn = self.drawer.render(poses, held)
-        seen = self.seen[go & state.as_seen].any(0)
-        child = self.drawer.draw(image, state.drawn, drawn, seen)
-        return child, ObjectsState(poses, held, drawn, state.as_seen & ~go)
 
 
 @dataclass
@@ -119,7 +83,7 @@ class ObjectBranches:
     one's objects, and their images (n, H, W, C)."""
 
     probability: np.ndarray
-    branches: list[ObjectsState]
+    branches: list[ObjectState]
     images: np.ndarray
 
 
@@ -137,7 +101,7 @@ class ObjectsBranchingModel(ObjectsModel):
         dynamics: ObjectDynamics,
         drawer: Drawer | None = None,
         risk: float = 0.0,
-        start: TrueStart | None = None,
+        start: ObjectState | None = None,
     ):
         super().__init__(image, recognizer, perception, dynamics, drawer, start)
         self.risk = risk
@@ -161,7 +125,8 @@ class ObjectsBranchingModel(ObjectsModel):
             probability = np.array([f.probability for f in found])
             kept = keep(probability / probability.sum())
             drawn = [
-                self._child(
+                step(
+                    self.drawer,
                     parent.state.images[found[i].row - mine.start],
                     parent.state.branches[found[i].row - mine.start],
                     outcomes.poses[found[i].row, found[i].outcome],
@@ -189,7 +154,7 @@ class _Next:
     best: float
 
 
-def _distinct(outcomes: Outcomes, rows: range, prior: np.ndarray) -> list[_Next]:
+def _distinct(outcomes: ObjectOutcomes, rows: range, prior: np.ndarray) -> list[_Next]:
     """The distinct next states of the branches `rows` (whose probabilities are `prior`)."""
     found: list[_Next] = []
     for row in rows:
@@ -205,7 +170,7 @@ def _distinct(outcomes: Outcomes, rows: range, prior: np.ndarray) -> list[_Next]
     return found
 
 
-def _alike(outcomes: Outcomes, row: int, o: int, row2: int, o2: int) -> bool:
+def _alike(outcomes: ObjectOutcomes, row: int, o: int, row2: int, o2: int) -> bool:
     """Whether two outcomes hold the same object and put every object in the same place: the
     same ones gone, centres within SAME_M, axes within SAME_DEG (two outcomes of a net are never
     equal to the bit, and drawing both would cost a render for what looks the same)."""

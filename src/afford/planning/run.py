@@ -278,10 +278,10 @@ def _ensemble(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Ou
 def _objects_true(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
     """The object world model's search started from the true objects, not the perceived ones."""
     from afford.data.draws import pose_array
-    from afford.planning.objects_model import TrueStart
+    from afford.objects.world import given
 
     scene.reset(task.scene)  # a task starts with the gripper empty
-    start = TrueStart(pose_array(scene), -1, scene.instance_mask())
+    start = given(nets.drawer, pose_array(scene), -1, scene.instance_mask())
     return _judge(
         task,
         "objects-true",

@@ -80,7 +80,7 @@ def perceived_sim_search(
 
 def objects_model(image: np.ndarray, config: PlannerConfig, nets: Nets, start=None) -> ObjectsModel:
     """The object world model on `image`: its likeliest outcome carried on, or every outcome a
-    branch (PlannerConfig.outcomes); from the perceived objects, or from `start` (TrueStart)."""
+    branch (PlannerConfig.outcomes); from the perceived objects, or from `start` (`objects/world.given`)."""
     from afford.planning.objects_model import ObjectsBranchingModel, ObjectsModel
 
     parts = (image, nets.recognizer, nets.perception, nets.dynamics, nets.drawer)

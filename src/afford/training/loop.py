@@ -78,6 +78,37 @@ def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:
     return factor
 
 
+def one_loss_loop(
+    kind: str,
+    config,
+    model: nn.Module,
+    optimizer: torch.optim.Optimizer,
+    batches: Iterable,
+    loss_of: Callable[[object], tuple[torch.Tensor, dict[str, float]]],
+    val_batch,
+    init: str | Path | None = None,
+) -> Loop:
+    """A loop on a warm-up and cosine schedule (the config's `warmup` and `steps`) whose training
+    step and validation are one loss: `loss_of(batch)` -> (loss, its parts), validated on
+    `val_batch`."""
+
+    def validate() -> dict[str, float]:
+        loss, parts = loss_of(val_batch)
+        return {"loss": float(loss), **parts}
+
+    return Loop(
+        kind=kind,
+        config=config,
+        model=model,
+        optimizer=optimizer,
+        batches=batches,
+        train_step=loss_of,
+        validate=validate,
+        lr_at=warmup_cosine(config.warmup, config.steps),
+        init=init,
+    )
+
+
 def _forever(batches: Iterable) -> Iterator:
     while True:
         yield from batches

@@ -155,8 +155,8 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         default=PlannerConfig.risk,
         metavar="W",
         help="ensemble planner, and learned, hybrid and objects planners with --outcomes expected: a plan "
-        "scores its expected goal loss (eq. 5; over the members and their variance heads' outcomes, or over "
-        "the net's branches) plus W standard deviations of it: risk-averse "
+        "scores its expected goal loss (eq. 5; over the members, or over the net's branches) plus W "
+        "standard deviations of it: risk-averse "
         f"(default {PlannerConfig.risk}); 0: the expected loss alone",
     )
     parser.add_argument(

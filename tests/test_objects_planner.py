@@ -179,3 +179,15 @@ def test_the_planner_and_the_rollout_take_the_same_object_step(scene):
     rows = torch.from_numpy(encode_affordance(action)[None, None])
     rolled = ObjectRollout(NETS.perception, NETS.dynamics, NETS.drawer).rollout(to_chw(image[None]), rows)
     np.testing.assert_array_equal(to_hwc(rolled[:, 0])[0], child)
+
+
+def test_the_true_start_plans_again_from_the_objects_as_they_are(scene):
+    """objects-true in closed loop: each round starts from the simulator's objects as the
+    last action left them, the gripper's held object among them."""
+    from afford.planning.outcome import PlannerConfig
+
+    task = load_task(TASK)
+    config = PlannerConfig(search=SearchConfig(progress=False), closed_loop=True)
+    outcome = solve(task, "objects-true", scene, config, NETS)
+    assert outcome.success and [a.type for a in outcome.plan] == ["grasp", "place"]
+    assert len(outcome.loop.steps) == 2

@@ -26,6 +26,7 @@ from afford.planning.searches import (
     objects_search,
     oracle_search,
     perceived_sim_search,
+    true_objects_search,
 )
 from afford.planning.symbolic import plan_symbolic
 from afford.planning.symbolic_outcome import solve_symbolic
@@ -275,21 +276,6 @@ def _ensemble(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Ou
     return outcome
 
 
-def _objects_true(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
-    """The object world model's search started from the true objects, not the perceived ones."""
-    from afford.data.draws import pose_array
-    from afford.objects.world import given
-
-    scene.reset(task.scene)  # a task starts with the gripper empty
-    start = given(nets.drawer, pose_array(scene), -1, scene.instance_mask())
-    return _judge(
-        task,
-        "objects-true",
-        objects_search(task, scene, config, nets, task.max_steps, start),
-        scene,
-    )
-
-
 _LEARNED = _searching(
     "learned",
     learned_search,
@@ -336,10 +322,11 @@ PLANNER_REGISTRY: dict[str, Planner] = {
     "hybrid-objects": _hybrid(
         "hybrid-objects", _OBJECTS, "canonical proposals checked by the object world model"
     ),
-    "objects-true": Planner(
-        _objects_true,
-        "the object world model from the true objects: what perception costs",
+    "objects-true": _searching(
+        "objects-true",
+        true_objects_search,
         ("recognizer", "perception", "dynamics"),
+        "the object world model from the true objects: what perception costs",
     ),
 }
 PLANNERS = tuple(PLANNER_REGISTRY)

@@ -101,3 +101,16 @@ def objects_search(
 
         result = with_searched_turns(result, model, task.goal)
     return result
+
+
+def true_objects_search(
+    task: Task, scene: Scene, config: PlannerConfig, nets: Nets, steps: int
+) -> SearchResult:
+    """The object world model's search from the simulator's objects as they are now, not the
+    perceived ones (`--planner objects-true`: beside `objects`, what perception costs a plan)."""
+    from afford.data.draws import pose_array
+    from afford.objects.world import given
+
+    held = [name for name, _ in scene.slots].index(scene.held) if scene.held else -1
+    start = given(nets.drawer, pose_array(scene), held, scene.instance_mask())
+    return objects_search(task, scene, config, nets, steps, start)

@@ -18,7 +18,7 @@ from afford.recognition.model import RecognitionNet
 from afford.recognition.targets import build_targets, decode, loss, suppress
 from afford.sim.affordances import Affordance
 from afford.training.distributed import join_world, loader_order, rank_batch, rank_threads, to_device, wrap
-from afford.training.loop import Loop, LoopState, run, warmup_cosine
+from afford.training.loop import LoopState, cosine_loop, run
 
 VAL_IMAGES = 256  # validation images per evaluation: enough to follow recall, quick on a CPU
 
@@ -91,16 +91,5 @@ def train(
             )
         return {"loss": float(total), "recall": tally.recall, "spurious_per_image": tally.spurious_per_image}
 
-    loop = Loop(
-        kind="recognition",
-        init=init,
-        config=config,
-        model=net,
-        optimizer=opt,
-        batches=loader,
-        train_step=train_step,
-        validate=validate,
-        lr_at=warmup_cosine(config.warmup, config.steps),
-        world=world,
-    )
+    loop = cosine_loop("recognition", config, net, opt, loader, train_step, validate, init, world)
     return run(loop, run_dir, progress)

@@ -78,6 +78,33 @@ def warmup_cosine(warmup: int, steps: int) -> Callable[[int], float]:
     return factor
 
 
+def cosine_loop(
+    kind: str,
+    config,
+    model: nn.Module,
+    optimizer: torch.optim.Optimizer,
+    batches: Iterable,
+    train_step: Callable[[object], tuple[torch.Tensor, dict[str, float]]],
+    validate: Callable[[], dict[str, float]],
+    init: str | Path | None = None,
+    world: World | None = None,
+) -> Loop:
+    """A loop on a warm-up and cosine schedule (the config's `warmup` and `steps`): every net's
+    but the prediction net's, whose presets may halve the rate on a plateau instead."""
+    return Loop(
+        kind=kind,
+        config=config,
+        model=model,
+        optimizer=optimizer,
+        batches=batches,
+        train_step=train_step,
+        validate=validate,
+        lr_at=warmup_cosine(config.warmup, config.steps),
+        init=init,
+        world=World() if world is None else world,
+    )
+
+
 def one_loss_loop(
     kind: str,
     config,
@@ -96,17 +123,7 @@ def one_loss_loop(
         loss, parts = loss_of(val_batch)
         return {"loss": float(loss), **parts}
 
-    return Loop(
-        kind=kind,
-        config=config,
-        model=model,
-        optimizer=optimizer,
-        batches=batches,
-        train_step=loss_of,
-        validate=validate,
-        lr_at=warmup_cosine(config.warmup, config.steps),
-        init=init,
-    )
+    return cosine_loop(kind, config, model, optimizer, batches, loss_of, validate, init)
 
 
 def _forever(batches: Iterable) -> Iterator:

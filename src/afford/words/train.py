@@ -14,8 +14,7 @@ from afford.data.augment import AugmentConfig
 from afford.data.format import Dataset
 from afford.data.predicted import PredictedStates, mixed_sampler
 from afford.metrics import roc_auc
-from afford.training.distributed import World
-from afford.training.loop import Loop, LoopState, run, warmup_cosine
+from afford.training.loop import LoopState, cosine_loop, run
 from afford.words.config import AgreementConfig
 from afford.words.data import ClauseBatch, ClauseData, collate_clauses
 from afford.words.model import AgreementNet
@@ -108,16 +107,5 @@ def train(
             "auc": roc_auc(logits.numpy(), val.truths.numpy()),
         }
 
-    loop = Loop(
-        kind="agreement",
-        init=init,
-        config=config,
-        model=net,
-        optimizer=opt,
-        batches=loader,
-        train_step=train_step,
-        validate=validate,
-        lr_at=warmup_cosine(config.warmup, config.steps),
-        world=World(),
-    )
+    loop = cosine_loop("agreement", config, net, opt, loader, train_step, validate, init)
     return run(loop, run_dir, progress)

@@ -51,7 +51,7 @@ def test_the_hand_written_sentences_read_to_the_clauses_they_mean():
 # development set (the grammar was fixed against it) and the held-out set (measured once, after).
 COLD = json.loads((Path(__file__).parent / "goal_sentences_cold.json").read_text())
 HELDOUT = json.loads((Path(__file__).parent / "goal_sentences_heldout.json").read_text())
-HELDOUT_FLOOR = 0.93  # of the held-out set read rightly or refused where meant: 94 of 101
+HELDOUT_FLOOR = 0.99  # of the held-out set read rightly or refused where meant: 100 of 101
 
 
 def measured(sentences: dict) -> tuple[float, list[str]]:
@@ -149,11 +149,46 @@ def test_how_a_goal_was_read_is_written_back_in_words():
         ("stacked", "swap the cup and the ball", ["on ball0 block0", "on cup0 support0"]),
         ("two-supports", "put the cup where the ball is", ["on cup0 support0"]),
         ("two-supports", "put the cup on the empty support", ["on cup0 support1"]),
+        # whose: what rests on the owner or what it rests on, at the start
+        ("two-supports", "put the ball back on its post", ["on ball0 support0"]),
+        ("two-supports", "put the cup on the ball's post", ["on cup0 support0"]),
+        ("stacked", "take the cup off its block", ["not on cup0 block0"]),
+        # "too" adds nothing; a state beside an instruction is part of the goal
+        (
+            "cup-ball-block",
+            "knock the cup over, and push the ball off the table too",
+            ["gone ball0", "tipped cup0"],
+        ),
+        (
+            "cup-ball-block",
+            "knock the cup over while the ball stays on the table",
+            ["on ball0 table", "tipped cup0"],
+        ),
+        (
+            "cup-ball-block",
+            "put the ball on the block, keeping the cup upright",
+            ["on ball0 block0", "upright cup0"],
+        ),
+        ("cup-ball-block", "while holding the ball, knock over the cup", ["held ball0", "tipped cup0"]),
+        ("cup-ball-block", "pick up the ball and don't let go of it", ["held ball0"]),
+        ("cup-ball-block", "pick up the cup, then let go of it", ["not held cup0"]),
+        # what follows a colon names what the pronouns before it name
+        (
+            "stacked",
+            "swap them: the cup on the support and the ball on the block",
+            ["on ball0 block0", "on cup0 support0"],
+        ),
     ],
 )
 def test_goals_said_in_more_ways_read_by_the_rules_of_the_grammar(scene, text, clauses):
     state = scene_state(scene)
     assert sorted(shown(c, state) for c in parse(text, state).clauses) == sorted(clauses)
+
+
+def test_a_pronoun_looks_forward_only_across_a_colon():
+    state = scene_state("cup-ball-block")
+    with pytest.raises(SentenceError, match="'it' refers to nothing said before it"):
+        parse("knock it over and put the cup on the block", state)
 
 
 def test_what_a_goal_reads_to_is_written_in_words_the_agreement_model_knows():

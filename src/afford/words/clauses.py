@@ -55,7 +55,9 @@ class Noun:
     empty support"); other: not the objects said before it nor what its subject rests on ("the
     other support"); excluded: the objects it leaves out ("every cup except the middle one");
     bears: what rests on it ("the support the ball is on"); quantity "host": what the noun of
-    `bears` rests on at the start, the table included ("where the ball was")."""
+    `bears` rests on at the start, the table included ("where the ball was"); owner: whose it
+    is ("its post", "the ball's post": what rests on the owner at the start or what it rests
+    on; a pronoun's owner is found by the clause, `reference.py`)."""
 
     words: str
     kind: str | None
@@ -70,6 +72,7 @@ class Noun:
     other: bool = False
     excluded: tuple[Noun, ...] = ()
     bears: tuple[Noun, ...] = ()
+    owner: tuple[Noun, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -94,8 +97,11 @@ class Pred:
 @dataclass(frozen=True)
 class Item:
     """One thing the goal asks: its subjects and what is said of them (preds None: what was
-    said in the item before, "and so is the cup"); instruction: said as an order ("put ...")."""
+    said in the item before, "and so is the cup"); instruction: said as an order ("put ...");
+    explained: said before a colon, its pronouns naming what the items after it name ("swap
+    them: the ball on the block and the cup on the support")."""
 
     subjects: tuple[Noun, ...]
     preds: tuple[Pred, ...] | None
     instruction: bool = False
+    explained: bool = False

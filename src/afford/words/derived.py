@@ -57,6 +57,28 @@ def bearing(state: State, k: int) -> list[int]:
     return [o for o in sorted(state.members) if o != k and state.standing(o) and on(state, o, k)]
 
 
+def belongs(state: State, k: int, owner: int) -> bool:
+    """Is slot k the owner's at the start ("its post", "the ball's post", "the block's cup"):
+    resting on it, or bearing it?"""
+    return k != owner and (k in bearing(state, owner) or owner in bearing(state, k))
+
+
+def owned(state: State, fits: list[int], owners: list[list[int]]) -> list[int]:
+    """The objects of `fits` owned by the first group of `owners` that owns any."""
+    for group in owners:
+        mine = [k for k in fits if any(belongs(state, k, o) for o in group)]
+        if mine:
+            return mine
+    return []
+
+
+def sole_owner(state: State, fits: list[int]) -> list[int]:
+    """The one object of the scene that owns any of `fits` ("its post" said where nothing
+    named before it has one), or none where several do."""
+    owners = [o for o in sorted(state.members) if any(belongs(state, k, o) for k in fits)]
+    return owners if len(owners) == 1 else []
+
+
 def turned(state: State, k: int, angle: int, name: str) -> str:
     """The lie (across or lengthwise) a turn of `angle` degrees gives the block k."""
     if angle % 90:

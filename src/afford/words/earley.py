@@ -41,24 +41,25 @@ _SPELT = {"u": "you", "pls": "please", "plz": "please", "thx": "thanks", "ur": "
 
 def words(text: str) -> list[str]:
     """The sentence as the grammar's words: lower case, contractions spelt out ("isn't": "is
-    not", "block's": "block 's"), hyphens as spaces, commas kept as words of their own (they
-    join items and lists), the rest of the punctuation dropped."""
+    not", "block's": "block 's"), hyphens as spaces, commas and colons kept as words of their own
+    (they join items and lists; what follows a colon says what was named before it),
+    semicolons read as commas, the rest of the punctuation dropped."""
     t = text.lower().replace("\u2019", "'").replace("\u2018", "'")
     for pattern, spelt in _CONTRACTIONS:
         t = re.sub(pattern, spelt, t)
     t = re.sub(r"(\d)\s*(°|º|deg\b)", r"\1 degrees", t)
     t = t.replace("&", " and ")
-    t = re.sub(r"[;:]", ",", t)
+    t = t.replace(";", ",")
     t = re.sub(r"[-/]", " ", t)
     t = re.sub(r"[.!?\"()]", " ", t)
-    t = t.replace(",", " , ")
+    t = t.replace(",", " , ").replace(":", " : ")
     return [_SPELT.get(w, w) for w in t.split()]
 
 
 def spoken(said: list[str]) -> str:
     """Normalised words written back as a person writes them: "block , then" as "block,
     then", "block 's" as "block's"."""
-    return " ".join(said).replace(" ,", ",").replace(" 's", "'s")
+    return " ".join(said).replace(" ,", ",").replace(" :", ":").replace(" 's", "'s")
 
 
 _RULE = re.compile(r"^([!?]?_?[a-z]\w*)\s*:(.*)$")

@@ -45,6 +45,17 @@ Where what people say could mean two things, one rule decides, whatever the sent
   one", "the cup nearest the robot" (the front one: the robot looks from the camera's side),
   "where the ball was", "between the cups"; a noun said once for two ("the left and the right
   cup").
+- "Its", "their" and "the ball's" before a noun name the one of that noun that rests on the
+  owner or that the owner rests on, at the start ("take the ball down from its post"). "Its"
+  is the clause's subject's where that has one, else of what was named before, most recent
+  first, else of the one object of the scene that has one; "their" of what was said last.
+- "Too", "as well" and "also" add nothing ("put the left cup on the block too").
+- A state said beside an instruction ("... while you put the ball on it", "..., keeping the
+  cup upright", "while holding the ball, ...") is part of the goal, as a purpose is. "Keep
+  holding X" asks for X held at the end; "let go of X", "release X", "drop X" for X not held,
+  and a pick-up said before them is on the way.
+- What follows a colon says what the pronouns of the item before it name ("swap them: the
+  ball on the block and the cup on the support").
 - A misspelt word is refused, never guessed, with the sentence spelt right offered; chat
   spellings ("u", "pls") are spelt out as contractions are.
 """
@@ -59,14 +70,18 @@ from lark.visitors import CollapseAmbiguities
 
 from afford.words import earley
 from afford.words.earley import words
+from afford.words.nouns import NOUN_PHRASES
 from afford.words.parses import Build, Item
 
-GRAMMAR = r"""
-start: _item (_join _later | _but _item)*
-_join: "and" | "," | "," "and" | _then | "and" _then | "," _then | "," "and" _then
+SENTENCES = r"""
+start: (_while_word? kept "," | _while _item ",")? _item (_join _later | _but _item | kept)*
+_join: "and" | "," | "," "and" | _then | "and" _then | "," _then | "," "and" _then | _while | colon
+_while: ","? _while_word "you"?
+_while_word: "while" | "whilst"
+colon: ":"
 _but: "but" | "," "but"
 _then: "then" | "after" "that" | "afterwards" | "next" | "finally" | "and" "finally"
-_later: _item | ditto
+_later: _item | ditto | kept
 ditto: dnp ("and" dnp)? _after?
 dnp: _the _mods noun                -> one
     | _the _mods nouns               -> every
@@ -81,7 +96,7 @@ purpose: command _so_that state _after?
 _so_that: "so" | "so" "that" | "," "so" | "," "so" "that" | "such" "that" | "in" "order" "that"
         | "until"
 _after: "any" "more" | "anymore" | "any" "longer" | "afterwards" | "in" "the" "end" | "at" "the" "end"
-      | "again"
+      | "again" | _too | "also"
 _lead: "first" | "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "that" | "see" "that"
      | "i" "want" | "i" "want" "that" | "i" "would" "like" | "i" "need" | "i" "expect"
      | "the" "goal" "is" | "the" "goal" "is" "that" | "make" "it" "so" "that" | "i" "would" "like" "it" "if"
@@ -144,9 +159,9 @@ complements: _particle? comp (_and? comp)*
 _particle: "down" | "back" | "back" "down" | "down" "again"
 comp: _on table                      -> on_table
     | _on nps                        -> on
-    | _end_at "the" side "end" ("of" nps)?     -> on_end
+    | _end_at ("the" | "its") side "end" ("of" nps)?     -> on_end
     | _end_at nps "'s" side "end"    -> on_end_named
-    | _end_at "the" _opposite "end" ("of" nps)? -> on_other_end
+    | _end_at ("the" | "its") _opposite "end" ("of" nps)? -> on_other_end
     | _on _ground                    -> off_table
     | _off table                     -> off_table
     | _off nps                       -> off
@@ -236,6 +251,12 @@ _fall_ing: "falling" | "rolling" | "dropping" | "slipping" | "sliding" | "tumbli
 _keep: "keep" | "stop" | "prevent"
 _fall_verb: "fall" | "roll" | "drop" | "slip" | "slide" | "tumble" | "get" "knocked" | "be" "knocked"
 
+// a state said beside an instruction: "..., keeping the cup upright", "while holding the ball"
+kept: _keeping nps complements               -> says_bare
+    | _holding nps                           -> holds
+_keeping: "keeping" | "leaving"
+_holding: "holding" | "still" "holding" | "keeping" "hold" "of" | "gripping" | "carrying"
+
 // ------------------------------------------------------------------ instructions
 command: _polite* action _tail?                        -> do
        | _polite* _keep nps "from" ving _tail?         -> keep_from
@@ -247,7 +268,7 @@ _courtesy: "please" | "can" "you" | "could" "you" | "would" "you" | "will" "you"
          | "try" "to" | "kindly" | "you" "should" | "you" "must" | "go" "and" | "first" | "finally" | "just"
          | "ok" | "okay" | "hey" | "lastly" | "next" | "also"
 _tail: "please" | "for" "me" | "thanks" | "thank" "you" | "now" | "," "please" | "," "thanks"
-     | "right" "now" | "if" "you" "can"
+     | "right" "now" | "if" "you" "can" | _too | "also" | "," _too
 _dont: "do" "not" | "never" | "be" "careful" "not" "to" | "take" "care" "not" "to"
 action: _put nps complements                  -> put
       | _put _particle nps complements        -> put
@@ -273,6 +294,8 @@ action: _put nps complements                  -> put
       | _rid nps                              -> rid
       | _rid nps _hide_at nps                 -> rid
       | "throw" "away" nps                    -> rid
+      | _keep_holding nps                     -> hold
+      | _let_go nps                           -> release
 ing: _tip_ing "over" nps                      -> tip
    | _tip_ing nps "over"                      -> tip
    | "toppling" nps                           -> tip
@@ -293,6 +316,10 @@ _put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "c
     | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
     | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
 _stand_verb: "stand"
+_keep_holding: "keep" "holding" | "keep" "hold" "of" | "keep" "a" "hold" "of" | "keep" "gripping"
+             | "keep" "carrying" | "continue" "holding" | "continue" "to" "hold" | "carry" "on" "holding"
+             | "hang" "on" "to" | "go" "on" "holding" | "stay" "holding"
+_let_go: "let" "go" "of" | "release" | "drop"
 _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect" | "grip" | "lift" "up"
      | "hold" "on" "to" | "seize" | "catch" | "snatch" | "take" "hold" "of" | "grab" "hold" "of" | "hold" "up"
      | "raise" "up" | "pick" "out"
@@ -303,82 +330,8 @@ _rid: "remove" | "clear" | "get" "rid" "of" | "dispose" "of" | "discard" | "clea
 _tip_ing: "knocking" | "tipping" | "pushing" | "turning"
 _push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
 
-// ------------------------------------------------------------------ noun phrases
-nps: np
-   | np ("," np)* ","? "and" np          -> all_of
-   | "both" np "and" np                  -> all_of
-   | "neither" np "nor" np               -> neither_of
-   | _the shared ("," _the? shared)* ","? "and" _the? _mods (noun | nouns) _posts -> shared_noun
-shared: mod+
-np: det _mods noun _posts                -> np_one
-  | det _mods nouns _posts               -> np_many
-  | "the" "other" number _posts          -> other_all
-  | "the" "others"                       -> other_all
-  | "it"                                 -> it
-  | "them"                               -> them
-  | "they"                               -> them
-  | "everything"                         -> everything
-// the determiner says how many the noun names (`lexicon.DETERMINERS`)
-!det: "neither" | "either" | "the" | "this" | "that" | "my" | "a" | "an" | "one" "of" "the" | "any" | "every"
-    | "each" | "all"
-    | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the" | "both" | "both" "the"
-    | "both" "of" "the" | "the" number | "all" number | number | "no" | "none" "of" "the" | "the" "other"
-    | "the" "other" number
-_the: "the" | "this" | "that" | "my"
-_a: "a" | "an" | "one" "of" "the" | "any"
-_every: "every" | "each"
-_all: "all" | "all" "the" | "all" "of" "the" | "each" "of" "the" | "any" "of" "the"
-_both: "both" | "both" "the" | "both" "of" "the"
-!number: "two" | "three"
-_mods: (mod | bare)*
-bare: "empty" | "free" | "bare" | "unoccupied" | "vacant"
-!mod: "blue" | "red" | "black" | "yellow" | "left" | "right" | "middle" | "centre" | "center" | "leftmost"
-    | "rightmost" | "first" | "second" | "third" | "fourth" | "last" | "front" | "back" | "rear" | "near"
-    | "far" | "nearest" | "farthest" | "furthest" | "closest" | "left" "hand" | "right" "hand" | "central"
-    | "outer" | "outside" | "outermost"
-    | "nearer" | "closer" | "farther" | "further"
-!noun: "cup" | "mug" | "ball" | "sphere" | "support" | "pillar" | "pedestal" | "block" | "brick" | "plank"
-     | "beam" | "bar" | "board" | "slab" | "post" | "stand" | "column" | "pole" | "cylinder" | "glass"
-     | "marble" | "one" | "thing" | "object"
-!nouns: "cups" | "mugs" | "balls" | "spheres" | "supports" | "pillars" | "pedestals" | "blocks" | "bricks"
-      | "planks" | "beams" | "bars" | "boards" | "slabs" | "posts" | "stands" | "columns" | "poles"
-      | "cylinders" | "glasses" | "marbles" | "ones" | "things" | "objects"
-_posts: post*
-?post: _left_of np                       -> left_of
-    | _right_of np                       -> right_of
-    | _front_of np                       -> in_front_of
-    | _behind np                         -> behind
-    | _on np                             -> on
-    | _on table                          -> on_table
-    | _that head complements             -> that
-    | _near np                           -> nearest
-    | (_that "is")? _closest _viewer     -> viewer_near
-    | (_that "is")? _farthest _viewer    -> viewer_far
-    | _except nps                        -> except_
-    | _that? np _rests_on                -> bears
-    | "with" np ("on" "it" | "on" "top" | "on" "top" "of" "it")?         -> bears
-    | _that? _bearing np ("on" "it" | "on" "top")?                      -> bears
-    | _under np                          -> bears
-    | "from" np                          -> on
-    | place
-    | "from" "the" side                  -> counted_from
-_that: "that" | "which"
-_closest: "nearest" | "nearest" "to" | "closest" "to" | "nearer" "to" | "closer" "to" | "next" "to"
-_farthest: "farthest" "from" | "furthest" "from" | "farther" "from" | "further" "from" | "far" "from"
-         | "away" "from"
-_bearing: "has" | "holds" | "carries" | "supports" | "holding" | "carrying" | "supporting" | "bearing"
-        | "having"
-_except: "but" | "except" | "except" "for" | "other" "than" | "apart" "from" | "besides" | "save"
-       | "excluding"
-_rests_on: _rest_verb "on" | _rest_verb "on" "top" "of" | _rest_verb "upon"
-_rest_verb: "is" | "was" | "sits" | "sat" | "rests" | "stands" | "lies" | "is" "sitting" | "is" "resting"
-          | "is" "standing" | "is" "lying"
-_near: "nearest" | "nearest" "to" | "closest" "to" | "next" "to" | "beside" | "near" | "by"
-!place: "on" "the" "left" | "on" "the" "right" | "to" "the" "left" | "to" "the" "right"
-            | "in" "the" "middle" | "in" "the" "centre" | "in" "the" "center" | "at" "the" "front"
-            | "at" "the" "back" | "in" "front" | "at" "the" "left" | "at" "the" "right"
-            | "on" "the" "far" "left" | "on" "the" "far" "right"
 """
+GRAMMAR = SENTENCES + NOUN_PHRASES
 
 MAX_PARSES = 64  # a sentence with more readings than this is refused as too tangled to read
 MAX_WORDS = 60  # and one longer than this, before its parses are counted (they grow fast)

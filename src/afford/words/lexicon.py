@@ -97,4 +97,5 @@ DETERMINERS = {
     **dict.fromkeys(("no", "none of the", "neither"), ("none", "none")),
     "either": ("every", "every"),
     "the other": ("one", "every"),
+    **dict.fromkeys(("its", "their"), ("one", "every")),
 }

@@ -11,6 +11,7 @@ apart.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -155,6 +156,8 @@ def _described(noun: Noun, fits: list[int], state: State, context: _Context) -> 
     ("except the middle one"), not the ones said before ("the other support")."""
     if context.source is not None and len(fits) > 1:  # "from the support": the one it is on
         fits = [k for k in fits if k in derived.bearing_of(state, context.source)] or fits
+    if noun.owner:
+        fits = derived.owned(state, fits, _owners(noun.owner[0], fits, state, context))
     if noun.bare:
         fits = [k for k in fits if not derived.bearing(state, k)]
     for other in noun.bears:
@@ -168,6 +171,18 @@ def _described(noun: Noun, fits: list[int], state: State, context: _Context) -> 
         said = {k for group in context.mentioned for k in group}
         fits = derived.other_than(noun, fits, said, context.subject, state)
     return fits
+
+
+def _owners(owner: Noun, fits: list[int], state: State, context: _Context) -> list[list[int]]:
+    """Whose "its" may be, most likely first: the clause's subject, what was named before (most
+    recent first), the one object that owns one of `fits`. "Their": what was said last."""
+    if owner.quantity == "them":
+        return [context.subjects]
+    if owner.quantity == "it":
+        said = [[context.subject]] if context.role == "other" and context.subject is not None else []
+        return [*said, *context.mentioned, derived.sole_owner(state, fits)]
+    context.inner += (named := resolve(owner, state, context))
+    return [named]
 
 
 def _counted(noun: Noun, fits: list[int], state: State) -> list[int]:
@@ -266,8 +281,11 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
     context = _Context([], [])
     said: list[tuple[Clause, bool]] = []  # each clause, and whether it is passing (held on the way)
     last_preds: tuple[Pred, ...] = ()
-    for item in items:
+    for at, item in enumerate(items):
         preds = item.preds if item.preds is not None else last_preds
+        if item.explained:  # "swap them: the ball on the block and ...": what the rest names
+            context.subjects = _named(items[at + 1 :], state)
+            context.mentioned.insert(0, context.subjects)
         subjects_said: list[int] = []
         others_said: list[int] = []
         known: dict[int, list[int]] = {}
@@ -307,6 +325,15 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
     return _settled(said, state), context.loose
 
 
+def _named(items: tuple[Item, ...], state: State) -> list[int]:
+    """The subjects `items` name by name (not by a pronoun), for a pronoun said before them."""
+    out: list[int] = []
+    for n in (n for item in items for n in item.subjects if n.quantity not in ("it", "them")):
+        with contextlib.suppress(Unresolved):  # refused where the item is read
+            out += resolve(n, state, _Context([], []))
+    return list(dict.fromkeys(out))
+
+
 def _pairs(
     pred: Pred, s: int, noun: Noun, subjects, state: State, context: _Context
 ) -> list[tuple[str, object]]:
@@ -343,6 +370,7 @@ def _others(pred: Pred, s: int, state: State, context: _Context) -> list[int | s
                 raise Unresolved(
                     f"{noun.words!r} has no ends a goal can speak of: the block has", noun.words, ("block",)
                 )
+            context.inner.append(k)  # named, for "its other end"
         return [pred.other]
     if not isinstance(pred.other, tuple):
         if pred.other is not None and pred.other not in relation.other_words:
@@ -370,11 +398,11 @@ def _kinds(kinds: tuple[str, ...]) -> str:
 
 def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...]:
     """The goal's clauses: a passing "held" left out where a later clause puts the object
-    somewhere ("pick up the ball and put it on the block" ends with the ball on the block),
-    each clause once, and none said both ways."""
+    somewhere or lets go of it ("pick up the ball and put it on the block" ends with the ball
+    on the block), each clause once, and none said both ways."""
     kept: list[Clause] = []
     for i, (clause, passing) in enumerate(said):
-        later = {c.fact.subject for c, _ in said[i + 1 :] if c.fact.relation != "held"}
+        later = {c.fact.subject for c, _ in said[i + 1 :] if c.fact.relation != "held" or c.negated}
         if passing and clause.fact.subject in later:
             continue
         if clause not in kept:

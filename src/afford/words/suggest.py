@@ -40,7 +40,7 @@ PLAIN = {
 VERB_RULES = (
     "_holds", "_be", "_have", "_be_base", "_verb", "_verb_base", "_stand", "_modal", "_do", "_keep",
     "_putdown", "_make", "_turn", "_swap", "_hide", "_put", "_stand_verb", "_take", "_give", "_tip",
-    "_topple", "_rid",
+    "_topple", "_rid", "_keep_holding", "_let_go",
 )  # fmt: skip
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import SMALL_SEED  # noqa: E402
 from conftest import SMALL_SEQUENCES as N  # noqa: E402
 from conftest import SMALL_SHARD as SHARD  # noqa: E402
 
@@ -29,11 +30,12 @@ from afford.data.generate import GenerateConfig, generate
 from afford.sim import camera
 from afford.sim.affordance import decode_affordance, encode_affordance
 from afford.sim.affordances import Affordance
+from afford.sim.scene import ObjectSpec as O
 
 
 def _generate_cli(out: Path, n: int, workers: int, shard: int = SHARD, **kw) -> subprocess.Popen:
     cmd = [sys.executable, "-m", "afford.cli.main", "generate", "--out", str(out), "--sequences", str(n)]
-    cmd += ["--seed", "3", "--workers", str(workers), "--shard-size", str(shard), "--json"]
+    cmd += ["--seed", str(SMALL_SEED), "--workers", str(workers), "--shard-size", str(shard), "--json"]
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, **kw)
 
 
@@ -150,7 +152,8 @@ def test_unknown_format_version_is_refused(small, tmp_path, capsys):
 
 def test_resume_with_other_settings_is_refused(small):
     with pytest.raises(DataError, match="same settings"):
-        generate(small, GenerateConfig(sequences=N + 1, seed=3, workers=1, shard_size=SHARD), progress=False)
+        config = GenerateConfig(sequences=N + 1, seed=SMALL_SEED, workers=1, shard_size=SHARD)
+        generate(small, config, progress=False)
 
 
 def test_info_and_show(small, tmp_path, capsys):
@@ -306,3 +309,23 @@ def test_balances_layout_starts_level_with_the_block_far_off_its_support(tmp_pat
     assert min(level) >= LAYOUTS["balances"].level_cos
     with pytest.raises(DataError, match="balances layout"):
         generate(tmp_path / "b", GenerateConfig(sequences=8, seed=4, workers=1, shard_size=4), progress=False)
+
+
+def test_visibility_counts_the_objects_a_mask_hides_and_what_covers_them(scene):
+    from afford.data.draws import pose_array
+    from afford.data.visibility import Visibility
+
+    # A ball under the block (hidden, covered by the block), a cup beside it (seen), and the
+    # same scene with the cup held (not counted).
+    scene.reset(
+        [O.upright("ball", 0.0, 0.30), O.upright("cup", 0.15, 0.22), O.upright("block", 0.0, 0.30, z=0.05)],
+        check=False,
+    )
+    slots = tuple(name for name, _ in scene.slots)
+    masks, poses = np.stack([scene.instance_mask()] * 2), np.stack([pose_array(scene)] * 2)
+    held = np.array([-1, slots.index("cup0")])
+    seen = Visibility()
+    seen.add(masks, poses, held, slots)
+    assert seen.present == {"ball": 2, "cup": 1, "block": 2}
+    assert seen.hidden == {"ball": 2} and seen.covered_by["ball"] == {"block": 2}
+    assert seen.as_dict()["per_kind"]["ball"]["share"] == 1.0

@@ -136,3 +136,14 @@ def test_canonical_grasp_then_place_moves_object_to_place_point(scene):
     assert scene.held is None
     np.testing.assert_allclose(cup.pos, [0.12, 0.38, SUPPORT_TOP + CUP.height / 2], atol=0.01)
     assert cup.up_axis[2] > 0.99
+
+
+def test_j_the_block_rests_and_tips_on_the_post_not_on_the_foot(scene):
+    """A support is a post on a wide foot plate: the block's statics are the post's top (5 cm),
+    so a bare block 2 cm off the post's centre stays level and one 3.5 cm off tips as it settles,
+    though the foot (9 cm) reaches under it."""
+    block_on_support(scene, -0.02, [])
+    assert scene.object("block0").up_axis[2] > 0.999
+    block_on_support(scene, -0.035, [])
+    block = scene.object("block0")
+    assert block.up_axis[2] < 0.99 or block.pos[2] < SUPPORT_TOP

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import SMALL_SEQUENCES, SMALL_SHARD
+from conftest import SMALL_SEED, SMALL_SEQUENCES, SMALL_SHARD
 
 
 @pytest.fixture
@@ -25,7 +25,7 @@ def test_ray_on_a_local_instance_writes_the_same_shards_as_local_workers(ray, sm
     from afford.data.generate import GenerateConfig, generate
 
     config = GenerateConfig(
-        sequences=SMALL_SEQUENCES, seed=3, workers=2, shard_size=SMALL_SHARD, executor="ray"
+        sequences=SMALL_SEQUENCES, seed=SMALL_SEED, workers=2, shard_size=SMALL_SHARD, executor="ray"
     )
     report = generate(tmp_path / "ray", config, progress=False)
     assert report.made_shards == SMALL_SEQUENCES // SMALL_SHARD

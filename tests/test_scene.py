@@ -1,5 +1,6 @@
 """Scenes by seed, snapshots, JSON, and the camera model."""
 
+import itertools
 import json
 
 import mujoco
@@ -9,6 +10,7 @@ from scenarios import do
 
 from afford.sim.affordances import Affordance, parametrise
 from afford.sim.camera import pixel_to_world, world_to_pixel
+from afford.sim.constants import BLOCK
 from afford.sim.layout import random_layout
 from afford.sim.scene import ObjectSpec as O
 from afford.sim.scene import SceneError, specs_from_json, specs_to_json
@@ -145,3 +147,20 @@ def test_home_pose_renders_identically_after_any_execution(scene):
     compare = region & ~fresh_objects & ~_objects_seen(scene)
     assert compare.sum() > 200
     np.testing.assert_array_equal(after[compare], fresh[compare])
+
+
+@pytest.mark.parametrize("where", [(0.0, 0.28), (0.0, 0.18), (-0.18, 0.40), (0.18, 0.16)])
+def test_a_support_under_the_block_shows_at_any_yaw_of_either(scene, where):
+    """The support that decides whether the block tips is seen (paper III.B): its foot shows
+    beside the block wherever the block rests on it. Nearest the camera's axis the block's top,
+    11 cm up, is drawn widest over the foot: the hardest place."""
+    from afford.sim.layout import SUPPORT_TOP, _yaw_quat
+
+    for block_yaw, support_yaw, along in itertools.product((0, 30, 45, 90), (0, 20, 45, 70), (-0.02, 0.02)):
+        u = np.array([np.cos(np.radians(block_yaw)), np.sin(np.radians(block_yaw))])
+        sx, sy = np.array(where) + u * along
+        block = O("block", (*where, SUPPORT_TOP + BLOCK.half[2]), _yaw_quat(np.radians(block_yaw)))
+        scene.reset([O.upright("support", sx, sy, support_yaw), block], settle=False, check=False)
+        mujoco.mj_forward(scene.model, scene.data)
+        shown = scene.visible_pixels("support0")
+        assert shown >= 30, (block_yaw, support_yaw, along, shown)

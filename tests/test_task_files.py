@@ -27,6 +27,11 @@ def test_every_task_file_loads_and_validates(scene, path):
     task = load_task(path, scene)
     assert 1 <= task.max_steps <= 8
     assert task.success.objects() <= set(task.object_names())
+    # Every support shows in the start image (paper III.B: the state is seen top-down).
+    scene.reset(task.scene)
+    for name in task.object_names():
+        if name.startswith("support"):
+            assert scene.visible_pixels(name) >= 30, (name, scene.visible_pixels(name))
 
 
 def test_the_schema_is_what_the_loader_and_the_predicates_read():

@@ -219,9 +219,7 @@ def test_effect_masks_move_with_the_augmented_images(small_dataset):
     assert effects.shape == (seq.length, *images.shape[2:]) and effects.dtype == torch.bool
     assert np.array_equal(effects[t].numpy(), expected) and expected.any()
     mirror = AugmentConfig(shift_px=0, mirror=True)
-    mirrored = PredictionData(
-        data, "train", augment_config=mirror, random_start=False, effect_masks=True
-    )
+    mirrored = PredictionData(data, "train", augment_config=mirror, random_start=False, effect_masks=True)
     mirrored.indices = [i]
     while True:  # the mirror is drawn half the time
         m_images, _, m_effects = mirrored[0]

@@ -66,6 +66,7 @@ def dataset_info(root: Path) -> dict:
 
     from afford.data.effects import KINDS, summary_effects
     from afford.data.format import DataError, read_manifest, shard_path, shard_status, shard_summary
+    from afford.data.visibility import Visibility
 
     m = read_manifest(root)
     present, missing = shard_status(root, m)
@@ -76,6 +77,7 @@ def dataset_info(root: Path) -> dict:
     side: Counter[str] = Counter()  # executions with a side effect, per type
     kinds: Counter[str] = Counter()  # executions showing each kind of side effect
     bad: list[str] = []
+    seen = Visibility() if m.generator.get("masks", False) else None
     for k in tqdm(present, desc="info", unit="shard", leave=False, disable=len(present) < 20):
         try:
             s = shard_summary(shard_path(root, k))
@@ -90,6 +92,9 @@ def dataset_info(root: Path) -> dict:
             side.update(step.type for step in steps if not step.canonical)
             for step in steps:
                 kinds.update(step.kinds)
+        if seen is not None:
+            with np.load(shard_path(root, k), allow_pickle=False) as z:
+                seen.add(z["masks"], s["poses"], s["held"], tuple(m.slots))
     disk = sum(f.stat().st_size for f in root.rglob("*") if f.is_file())
     counts = np.array(per_state) if per_state else np.zeros(1)
     return {
@@ -114,6 +119,7 @@ def dataset_info(root: Path) -> dict:
             "per_type": {t: side.get(t, 0) for t in TYPES},
             "per_kind": {k: kinds.get(k, 0) for k in KINDS},
         },
+        "visibility": None if seen is None else seen.as_dict(),
         "disk_bytes": disk,
     }
 
@@ -146,6 +152,15 @@ def cmd_data_info(args) -> int:
     )
     print(f"  side effects {fx['executions']} executions ({share:.1%}; {per})")
     print("     by kind  " + ", ".join(f"{k} {n}" for k, n in fx["per_kind"].items()))
+    if info["visibility"] is not None:
+        v = info["visibility"]
+        print(f"  hidden      present objects showing fewer than {v['min_pixels']} px, and what covers them:")
+        for kind, row in v["per_kind"].items():
+            cover = ", ".join(f"{c} {n}" for c, n in row["covered_by"].items())
+            print(
+                f"     {kind:8s} {row['hidden']} of {row['present']} ({row['share']:.2%})"
+                + (f": {cover}" if cover else "")
+            )
     print(f"  disk        {info['disk_bytes'] / 2**20:.1f} MiB")
     return 0
 

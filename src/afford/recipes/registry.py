@@ -18,6 +18,7 @@ class Recipe:
     unknown: tuple[str, ...] = ()  # details of the first making that are not on record
 
 
+FOOT_COMMIT = "pending"
 _BUILDS = "the MuJoCo and torch builds the data and training first ran on (constraints.txt pins them now)"
 
 # One entry per shipped file, by its path under weights/.
@@ -33,11 +34,13 @@ RECIPES: dict[str, Recipe] = {
                 "predict-recognition-states",
                 "train-recognition-10k",
                 "train-recognition",
+                "data-cpu-4k",
+                "train-recognition-foot",
                 "calibrate-recognition",
                 "export-recognition",
             ),
-            trained="train-recognition",
-            commit="ec514db",
+            trained="train-recognition-foot",
+            commit=FOOT_COMMIT,
             unknown=(_BUILDS,),
         ),
         Recipe(

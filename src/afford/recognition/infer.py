@@ -49,7 +49,6 @@ class Recognizer:
         self.config = config
         self.threshold = config.confidence if threshold is None else threshold
 
-
     @torch.no_grad()
     def raw(self, images: np.ndarray | torch.Tensor, batch_size: int = 256) -> torch.Tensor:
         """Head outputs for RGBD images in [0, 1]: NumPy (B, H, W, 4), or tensors (B, 4, H, W)

@@ -83,8 +83,18 @@ class Ball:
 
 @dataclass(frozen=True)
 class Support:
+    """A post on a foot plate, one body. The post's top, narrower than the block, is what the
+    block rests and tips on; the foot, wider than the block, is what the top-down camera sees
+    of a support under the block (paper III.B: the support that decides a tip must show)."""
+
     half: tuple[float, float, float] = (0.025, 0.025, 0.03)  # 6 cm tall: a ball fits beneath an overhang
+    # 9 x 9 cm: the perspective camera draws the block's top (11 cm up) 19% wider than its
+    # footprint, so an 8 cm foot under it shows as little as 23 px where the block is nearest the
+    # camera's axis; 9 cm shows at least 45 px at any yaw of either (tests/test_scene.py).
+    # 6 mm thick, so validation's penetration margin still refuses an object that overlaps it.
+    foot_half: tuple[float, float, float] = (0.045, 0.045, 0.003)
     mass: float = 0.6
+    foot_mass_fraction: float = 0.15  # the foot's share of the mass (its volume beside the post's)
     rgba: tuple[float, float, float, float] = (0.05, 0.05, 0.05, 1.0)
 
 
@@ -208,6 +218,13 @@ class WordThresholds:
     vague_deg: float = 10.0
 
 
+@dataclass(frozen=True)
+class Visibility:
+    """When the camera shows an object (data/visibility.py): read from instance masks."""
+
+    min_pixels: int = 20  # fewer pixels than this: the object is hidden from the image
+
+
 UR3_DH = UR3()
 GRIPPER = Gripper()
 CUP = Cup()
@@ -223,6 +240,7 @@ LIMITS = Limits()
 TOLERANCES = Tolerances()
 EFFECTS = EffectThresholds()
 WORDS = WordThresholds()
+VISIBILITY = Visibility()
 
 KINDS = ("cup", "ball", "support", "block")
 GRASPABLE = ("cup", "ball", "block")

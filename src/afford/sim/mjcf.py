@@ -124,8 +124,16 @@ def _object_geoms(kind: str, attrs: str, with_mass: bool = True, inflate: float 
             f' friction="{fr}"{mass} {attrs}/>'
         )
     if kind == "support":
-        mass = f' mass="{SUPPORT.mass}"' if with_mass else ""
-        return f'<geom type="box" size="{_v(SUPPORT.half)}" rgba="{_v(SUPPORT.rgba)}"{mass} {attrs}/>'
+        foot_mass = SUPPORT.mass * SUPPORT.foot_mass_fraction
+        post = f' mass="{SUPPORT.mass - foot_mass:.5g}"' if with_mass else ""
+        foot = f' mass="{foot_mass:.5g}"' if with_mass else ""
+        # The foot's bottom is the post's: the support's lowest and highest points are unchanged.
+        foot_z = SUPPORT.foot_half[2] - SUPPORT.half[2]
+        return (
+            f'<geom type="box" size="{_v(SUPPORT.half)}" rgba="{_v(SUPPORT.rgba)}"{post} {attrs}/>\n'
+            f'<geom type="box" size="{_v(SUPPORT.foot_half)}" pos="0 0 {foot_z:.5g}"'
+            f' rgba="{_v(SUPPORT.rgba)}"{foot} {attrs}/>'
+        )
     if kind == "block":
         mass = f' mass="{BLOCK.mass}"' if with_mass else ""
         fr = f"{BLOCK.friction} {PHYSICS.friction[1]} {PHYSICS.friction[2]}"

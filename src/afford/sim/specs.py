@@ -43,12 +43,12 @@ class ObjectSpec:
         return ObjectSpec(kind, (x, y, z + REST_HALF_HEIGHT[kind]), (np.cos(half), 0.0, 0.0, np.sin(half)))
 
 
-# The radius of the circle an object's footprint fits in (the block's: its half width; layouts
-# place the block by circles along it).
+# The radius of the circle an object's footprint fits in, at any yaw (the block's: its half
+# width; layouts place the block by circles along it).
 FOOTPRINT = {
     "cup": CUP.radius,
     "ball": BALL.radius,
-    "support": float(np.hypot(*SUPPORT.half[:2])),
+    "support": float(np.hypot(*SUPPORT.foot_half[:2])),  # the foot's: wider than the post
     "block": BLOCK.half[1],
 }
 

@@ -18,7 +18,7 @@ class Recipe:
     unknown: tuple[str, ...] = ()  # details of the first making that are not on record
 
 
-FOOT_COMMIT = "pending"
+FOOT_COMMIT = "9f1c7cf"  # the commit that ships the recognition net of the footed world
 _BUILDS = "the MuJoCo and torch builds the data and training first ran on (constraints.txt pins them now)"
 
 # One entry per shipped file, by its path under weights/.

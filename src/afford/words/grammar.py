@@ -33,18 +33,25 @@ Where what people say could mean two things, one rule decides, whatever the sent
 - "From" after a moved object names where it starts ("move the ball from the post onto the
   block"), the one it rests on where the name fits several, and asks for nothing where the
   sentence puts it somewhere; "remove the ball from the support" is not on it.
-- A turn ("turn the block", "rotate the block 90 degrees", "a quarter turn", "around") is said
-  of the block's lie at the start: a quarter turn, or a turn with no angle, the other lie; a
-  half turn the same; other angles are refused (`derived.py`).
+- A turn ("turn the block", "rotate the block 90 degrees", "a quarter turn", "around", "give
+  the block a half turn") is said of the block's lie at the start: a quarter turn, or a turn
+  with no angle, the other lie; a half turn the same; other angles are refused (`derived.py`).
+- A purpose after a verb that asks a state of its own ("turn the block so that both balls roll
+  off") adds to it: the reading where the verb asks nothing is less likely meant. A purpose
+  may end in a verb of a state ("so that the cup falls over": tipped; "disappears": gone).
+- "Clear (off) X", "empty X": what rests on X at the start is not on it, each cup, ball or
+  block on it.
+- "Would you mind VERBing ..." is "please VERB ..."; courtesies stack ("could you please").
 - "Put X down" alone is X on the table; "down" and "back" before a place are read past ("put
   the ball back on the table").
 - Verbs whose goal is a state: "make/let X disappear, fall over, fall off the table", "X should
   disappear"; "balance X on Y" is on.
 - Names may describe an object by the start scene: "the other support" (not the one named or
-  rested on), "the empty support", "the support the ball is on", "every cup except the middle
-  one", "the cup nearest the robot" (the front one: the robot looks from the camera's side),
-  "where the ball was", "between the cups"; a noun said once for two ("the left and the right
-  cup").
+  rested on), "the empty support", "the support the ball is on", "the post where the ball was",
+  "every cup except the middle one", "the cup nearest the robot" (the front one: the robot
+  looks from the camera's side), "where the ball was", "between the cups"; a noun said once for
+  two ("the left and the right cup"). "The other one" takes its kind from its own role, else
+  from the subject's ("put the left mug to the right of the other one": the other cup).
 - "Its", "their" and "the ball's" before a noun name the one of that noun that rests on the
   owner or that the owner rests on, at the start ("take the ball down from its post"). "Its"
   is the clause's subject's where that has one, else of what was named before, most recent
@@ -131,6 +138,7 @@ vp: head complements
   | _modal _stand_base               -> stands
   | _modal vstate                    -> vp_do
   | _modal "not" vstate              -> vp_dont
+  | vstates                          -> vp_do
   | _do "not" vstate                 -> vp_dont
 head: _pos                           -> yes
     | _modal "no" "longer" _be_base  -> nolonger
@@ -239,6 +247,14 @@ vstate: _vanish                           -> gone
 _toppling: _fall_verb "over" | _fall_verb "down" | "topple" | "topple" "over" | "tip" "over" | "tip" | "fall"
 _fall_off: _fall_verb "off" | _fall_verb "off" "of"
 _vanish: "disappear" | "vanish" | "go" "away" | "go" "missing" | "leave" "the" "table"
+// the same, said of its subject: "so that the cup falls over", "until both balls roll off the table"
+vstates: _vanishes                        -> gone
+       | _topples                         -> tipped
+       | _falls "off" "of"? table          -> off_table
+       | _falls "off" "of"? nps            -> off
+_topples: _falls "over" | _falls "down" | "topples" | "topples" "over" | "tips" "over" | "tips"
+_falls: "falls" | "rolls" | "drops" | "slips" | "slides" | "tumbles" | "gets" "knocked"
+_vanishes: "disappears" | "vanishes" | "goes" "away" | "goes" "missing" | "leaves" "the" "table"
 // the same, said after "keep the cup from"
 ving: _tipping                      -> tipped
     | _fall_ing "off" table          -> off_table
@@ -287,6 +303,9 @@ action: _put nps complements                  -> put
       | "pick" nps "up"                       -> take
       | _take nps                             -> take
       | _give "me" nps                        -> take
+      | _give nps "a" degrees? _a_turn        -> turn
+      | _clear "off"? nps                     -> clear
+      | _clear nps "off"                      -> clear
       | _give nps "to" "me"                   -> take
       | _tip "over" nps                       -> tip
       | _tip nps "over"                       -> tip
@@ -302,6 +321,8 @@ ing: _tip_ing "over" nps                      -> tip
    | _push_ing nps _off table                 -> rid
    | _push_ing nps _off nps                   -> ing_off
    | "dropping" nps                           -> rid
+_a_turn: "turn" | "twist" | "spin" | "rotation"
+_clear: "clear" | "empty" | "unload" | "free" "up"
 _putdown: "put" | "set" | "lay" | "place"
 _make: "make" | "let" | "have" | "get"
 _turn: "turn" | "rotate" | "spin" | "twist" | "swivel" | "pivot" | "reorient"
@@ -326,7 +347,7 @@ _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect"
 _give: "hand" | "give" | "bring" | "pass" | "fetch"
 _tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
 _topple: "topple" | "upset" | "overturn"
-_rid: "remove" | "clear" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
+_rid: "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
 _tip_ing: "knocking" | "tipping" | "pushing" | "turning"
 _push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
 
@@ -363,9 +384,23 @@ def known_words() -> frozenset[str]:
     return _built()[1]
 
 
+def _minded(said: list[str], known: frozenset[str]) -> list[str]:
+    """A request read as "please ...": "would you mind rotating the block" as "please rotate the
+    block", the verb after "mind" in its base form where that is a word the grammar reads."""
+    for i in range(len(said) - 3):
+        if said[i] in ("would", "do", "will") and said[i + 1 : i + 3] == ["you", "mind"]:
+            verb = said[i + 3]
+            stem = verb[:-3] if verb.endswith("ing") else ""
+            bases = (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "")
+            base = next((b for b in bases if b in known), None)
+            if base is not None:
+                return [*said[:i], "please", base, *_minded(said[i + 4 :], known)]
+    return said
+
+
 def read(text: str) -> list[tuple[Item, ...]]:
     """Every parse of `text`, as items in the order said; `Unread` if it has none."""
-    said = words(text)
+    said = _minded(words(text), known_words())
     if not said:
         raise Unread("the goal sentence is empty", said, None)
     known = known_words()

@@ -84,6 +84,7 @@ _posts: post*
     | (_that "is")? _farthest _viewer    -> viewer_far
     | _except nps                        -> except_
     | _that? np _rests_on                -> bears
+    | "where" np _was                    -> bears
     | "with" np ("on" "it" | "on" "top" | "on" "top" "of" "it")?         -> bears
     | _that? _bearing np ("on" "it" | "on" "top")?                      -> bears
     | _under np                          -> bears

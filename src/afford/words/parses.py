@@ -261,6 +261,11 @@ class Build(NounPhrases):
     def tip(self, meta, c):
         return as_nouns(c[0]), (Pred("tipped"),)
 
+    def clear(self, meta, c):  # "clear the block": what rests on it at the start is off it
+        hosts = as_nouns(c[0])
+        said = "everything on " + " and ".join(n.words for n in hosts)
+        return (Noun(said, None, "every", restrict=(Pred("on", hosts),)),), (Pred("on", hosts, negated=True),)
+
     def rid(self, meta, c):
         return as_nouns(c[0]), (Pred("gone"),)
 

@@ -11,7 +11,7 @@ apart.
 
 from __future__ import annotations
 
-import contextlib
+from contextlib import suppress
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -89,14 +89,15 @@ def _listed(state: State, slots: list[int]) -> str:
 # ---------------------------------------------------------------------------- noun phrases
 @dataclass
 class _Context:
-    """What a sentence has named so far, most recent first, for "it" and "them"; and how many
-    relative references it used that picked nothing out (the object was the only one of its
-    kind already), which makes a parse less likely to be the one meant."""
+    """What a sentence has named so far, most recent first, for "it" and "them"; and how loose
+    it is (relative references that picked nothing out, as the object was the only one of its
+    kind already; verbs read as asking nothing), which makes a parse less likely meant."""
 
     mentioned: list[list[int]]
     subjects: list[int]
     loose: int = 0
-    # "the right one": the kind of the last noun said in the same role (subject or other)
+    # "the right one": the kind of the last noun said in the same role (subject or other); "the
+    # other one" said where its role has none: the subject's ("... right of the other one")
     kinds: dict[str, str] = field(default_factory=dict)
     role: str = "subject"
     subject: int | None = None  # the subject of the clause being read, for "the other support"
@@ -119,7 +120,7 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
         raise Unresolved(f"{noun.words!r} names a place, not an object", noun.words)
     kind = noun.kind
     if kind is None and noun.colour is None and (noun.other or noun.words.split()[-1] in ("one", "ones")):
-        kind = context.kinds.get(context.role)
+        kind = context.kinds.get(context.role, context.kinds.get("subject") if noun.other else None)
     role = context.role
     fits = [k for k in sorted(state.members) if kind is None or state.kind(k) == kind]
     plural = PLURALS[kind]
@@ -188,12 +189,8 @@ def _owners(owner: Noun, fits: list[int], state: State, context: _Context) -> li
 def _counted(noun: Noun, fits: list[int], state: State) -> list[int]:
     want = QUANTITIES.get(noun.quantity)
     if noun.quantity in ("one", "some") and len(fits) > 1:
-        raise Unresolved(
-            f"{noun.words!r} names no object alone: {len(fits)} {PLURALS[noun.kind]} fit it "
-            f"({_listed(state, fits)})",
-            noun.words,
-            own(noun),
-        )
+        listed = f"{len(fits)} {PLURALS[noun.kind]} fit it ({_listed(state, fits)})"
+        raise Unresolved(f"{noun.words!r} names no object alone: {listed}", noun.words, own(noun))
     if want is not None and len(fits) != want:
         counted = f"{len(fits)} {PLURALS[noun.kind] if len(fits) != 1 else noun.kind or 'object'}"
         raise Unresolved(f"{noun.words!r}: the scene has {counted}, not {want}", noun.words, own(noun))
@@ -289,7 +286,8 @@ def clauses_of(items: tuple[Item, ...], state: State) -> tuple[tuple[Clause, ...
         subjects_said: list[int] = []
         others_said: list[int] = []
         known: dict[int, list[int]] = {}
-        if not preds:  # "move the ball so that ...": named, for "it", and nothing asked of it
+        if not preds:  # "move the ball so that ...": named, for "it", nothing asked of it
+            context.loose += 1
             subjects_said += [k for k, _ in _slots(item.subjects, KINDS, state, context)]
         for pred in preds:
             relation = RELATIONS[STANDS_FOR.get(pred.relation, pred.relation)]
@@ -329,7 +327,7 @@ def _named(items: tuple[Item, ...], state: State) -> list[int]:
     """The subjects `items` name by name (not by a pronoun), for a pronoun said before them."""
     out: list[int] = []
     for n in (n for item in items for n in item.subjects if n.quantity not in ("it", "them")):
-        with contextlib.suppress(Unresolved):  # refused where the item is read
+        with suppress(Unresolved):  # refused where the item is read
             out += resolve(n, state, _Context([], []))
     return list(dict.fromkeys(out))
 
@@ -429,9 +427,9 @@ def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...
 
 def understand(text: str, state: State) -> tuple[Clause, ...]:
     """The clauses `text` says of `state`: every parse resolved in the scene; those that fail
-    left out; of the rest, those that use a relative reference to pick out an object that is
-    the only one of its kind anyway are less likely meant. grammar.Unread, Unresolved (the
-    first parse's failure when none resolves) or Ambiguous."""
+    left out; of the rest, those with a relative reference that picks out nothing, or a verb
+    read as asking nothing before a purpose ("turn the block so that"), are less likely meant.
+    grammar.Unread, Unresolved (the first parse's failure when none resolves) or Ambiguous."""
     readings = grammar.read(text)
     found: list[tuple[tuple[Clause, ...], int]] = []
     failed: list[Unresolved] = []

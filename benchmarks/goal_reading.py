@@ -1,8 +1,9 @@
 """Goal reading speed: how long `parse` takes to read each sentence of the goal grammar's test
 sets in its scene, refusals (with their suggestion) included: the hand-written set
-(tests/goal_sentences.json) and the three written cold, without the grammar at hand
+(tests/goal_sentences.json) and the four written cold, without the grammar at hand
 (tests/goal_sentences_cold.json, tests/goal_sentences_heldout.json,
-tests/goal_sentences_heldout2.json; their scenes are the first set's).
+tests/goal_sentences_heldout2.json, tests/goal_sentences_heldout3.json; their scenes are the
+first set's).
 
     python benchmarks/goal_reading.py [--repeats 3] [--sets NAME ...] [--json]
 
@@ -26,6 +27,7 @@ SETS = {
     "cold": "goal_sentences_cold.json",
     "heldout": "goal_sentences_heldout.json",
     "heldout2": "goal_sentences_heldout2.json",
+    "heldout3": "goal_sentences_heldout3.json",
 }
 TARGET_MS = 50.0
 

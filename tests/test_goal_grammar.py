@@ -55,6 +55,10 @@ HELDOUT = json.loads((Path(__file__).parent / "goal_sentences_heldout.json").rea
 HELDOUT_FLOOR = 0.99  # of the held-out set read rightly or refused where meant: 100 of 101
 HELDOUT2 = json.loads((Path(__file__).parent / "goal_sentences_heldout2.json").read_text())
 HELDOUT2_FLOOR = 0.97  # 87 of 89 with the rules for its failure kinds
+# The third held-out set, written cold by a writer who never saw the grammar: measured once, at
+# 3b16099, 72 of 82; the grammar is not changed to fit it.
+HELDOUT3 = json.loads((Path(__file__).parent / "goal_sentences_heldout3.json").read_text())
+HELDOUT3_FLOOR = 0.87  # measured once: 72 of 82
 
 
 def measured(sentences: dict) -> tuple[float, list[str]]:
@@ -92,10 +96,16 @@ def test_the_second_held_out_sentences_read_as_measured():
     assert share >= HELDOUT2_FLOOR, f"{share:.3f}\n" + "\n".join(wrong)
 
 
+def test_the_third_held_out_sentences_read_as_measured():
+    assert len(HELDOUT3["read"]) + len(HELDOUT3["refuse"]) >= 72
+    share, wrong = measured(HELDOUT3)
+    assert share >= HELDOUT3_FLOOR, f"{share:.3f}\n" + "\n".join(wrong)
+
+
 @pytest.mark.parametrize(
     ("sentences", "floor"),
-    [(COLD, 1.0), (HELDOUT, HELDOUT_FLOOR), (HELDOUT2, HELDOUT2_FLOOR)],
-    ids=["cold", "heldout", "heldout2"],
+    [(COLD, 1.0), (HELDOUT, HELDOUT_FLOOR), (HELDOUT2, HELDOUT2_FLOOR), (HELDOUT3, HELDOUT3_FLOOR)],
+    ids=["cold", "heldout", "heldout2", "heldout3"],
 )
 def test_every_refusal_is_one_line_with_a_sentence_that_reads(sentences, floor):
     """Each refusal of a cold set, meant or not, offers a reading a person would write: a

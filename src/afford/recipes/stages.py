@@ -139,7 +139,8 @@ STAGES: tuple[Stage, ...] = (
         "afford generate --out data/cpu-4k --sequences 4000 --seed 0 --splits-of 10000 --workers 2",
         17,
         "the first 4,000 sequences of data/cpu with its val and test splits; 17 min while sharing the "
-        "machine",
+        "machine; first made with each support's post reaching the table beside its foot (the same "
+        "images; contacts with the table that the post standing on its foot leaves to the foot alone)",
     ),
     _stage(
         "train-recognition-foot",

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from afford.data.effects import slot_kind
 from afford.sim import camera as cam
 from afford.sim.constants import KINDS, VISIBILITY
 
@@ -32,7 +33,7 @@ class Visibility:
 
     def add(self, masks: np.ndarray, poses: np.ndarray, held: np.ndarray, slots: tuple[str, ...]) -> None:
         """States of a shard: masks (T, H, W) of slot indices, poses (T, slots, 7), held (T,)."""
-        kinds = [_kind(name) for name in slots]
+        kinds = [slot_kind(name) for name in slots]
         for t in range(len(masks)):
             counts = np.bincount(masks[t].ravel().astype(np.int64) + 1, minlength=len(slots) + 1)[1:]
             for k, kind in enumerate(kinds):
@@ -61,10 +62,6 @@ class Visibility:
                 if self.present[kind]
             },
         }
-
-
-def _kind(slot: str) -> str:
-    return slot.rstrip("0123456789")
 
 
 def _cover(mask: np.ndarray, centre: np.ndarray, k: int, kinds: list[str]) -> str:

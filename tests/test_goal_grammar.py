@@ -61,18 +61,26 @@ HELDOUT3 = json.loads((Path(__file__).parent / "goal_sentences_heldout3.json").r
 HELDOUT3_FLOOR = 0.87  # measured once: 72 of 82
 
 
+def as_goal(clauses: list[str]) -> list[str]:
+    """Clauses as the goal they ask for: sorted, and "not on X Y" left out where X is also put
+    on something else or gone, which it implies ("take the cup off the block and put it on the
+    table"): writers differ in whether they say it."""
+    placed = {c.split()[1] for c in clauses if c.split()[0] in ("on", "on_end", "gone")}
+    return sorted(c for c in clauses if not (c.startswith("not on ") and c.split()[2] in placed))
+
+
 def measured(sentences: dict) -> tuple[float, list[str]]:
-    """The share of a cold set read to the clauses meant (in any order) or refused where
+    """The share of a cold set read to the clauses meant (as a goal, `as_goal`) or refused where
     meant, and what went wrong with the rest."""
     wrong = []
     for kind in ("read", "refuse"):
         for case in sentences[kind]:
             state = scene_state(case["scene"])
             try:
-                got = sorted(shown(c, state) for c in parse(case["text"], state).clauses)
+                got = as_goal([shown(c, state) for c in parse(case["text"], state).clauses])
             except SentenceError as e:
                 got = [f"refused: {e}"]
-            meant = sorted(case["clauses"]) if kind == "read" else None
+            meant = as_goal(case["clauses"]) if kind == "read" else None
             if (got != meant) if kind == "read" else not got[0].startswith("refused"):
                 wrong.append(f"{case['scene']}: {case['text']!r}: {got} (meant {meant or 'a refusal'})")
     return 1 - len(wrong) / (len(sentences["read"]) + len(sentences["refuse"])), wrong

@@ -67,6 +67,7 @@ class Noun:
     from_right: bool = False
     restrict: tuple[Pred, ...] = ()
     nearest: tuple[Noun, ...] = ()
+    farthest: tuple[Noun, ...] = ()  # "the cup farther from the ball"
     denied: bool = False
     bare: bool = False
     other: bool = False

@@ -36,7 +36,9 @@ _CONTRACTIONS = (
 
 # Chat spellings, spelt out as contractions are (a misspelt word is not guessed: it is refused
 # with the spelling that reads offered).
-_SPELT = {"u": "you", "pls": "please", "plz": "please", "thx": "thanks", "ur": "your", "r": "are"}
+_SPELT = {"u": "you", "pls": "please", "plz": "please", "thx": "thanks", "ur": "your", "r": "are", "thats": "that is",
+          "dont": "do not", "doesnt": "does not", "isnt": "is not", "cant": "can not", "wont": "will not",
+          "shouldnt": "should not", "im": "i am", "lets": "let 's", "whats": "what is"}
 
 
 def words(text: str) -> list[str]:
@@ -49,11 +51,12 @@ def words(text: str) -> list[str]:
         t = re.sub(pattern, spelt, t)
     t = re.sub(r"(\d)\s*(°|º|deg\b)", r"\1 degrees", t)
     t = t.replace("&", " and ")
+    t = re.sub("--+|\u2014|\u2013", ",", t)
     t = t.replace(";", ",")
     t = re.sub(r"[-/]", " ", t)
     t = re.sub(r"[.!?\"()]", " ", t)
     t = t.replace(",", " , ").replace(":", " : ")
-    return [_SPELT.get(w, w) for w in t.split()]
+    return [s for w in t.split() for s in _SPELT.get(w, w).split()]
 
 
 def spoken(said: list[str]) -> str:

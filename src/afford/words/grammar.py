@@ -63,8 +63,11 @@ Where what people say could mean two things, one rule decides, whatever the sent
   and a pick-up said before them is on the way.
 - What follows a colon says what the pronouns of the item before it name ("swap them: the
   ball on the block and the cup on the support").
-- A misspelt word is refused, never guessed, with the sentence spelt right offered; chat
-  spellings ("u", "pls") are spelt out as contractions are.
+- A misspelt word is read as the one known word a single slip away (a letter dropped, added,
+  changed, or two swapped: "blok", "teh", "lenghtwise"), where there is exactly one and the
+  word has at least three letters; the reading shown says which word was read. Otherwise it is
+  refused, with the sentence spelt right offered. Chat spellings ("u", "pls") are spelt out as
+  contractions are.
 """
 
 from __future__ import annotations
@@ -83,11 +86,13 @@ from afford.words.parses import Build, Item
 SENTENCES = r"""
 start: (_while_word? kept "," | _while _item ",")? _item (_join _later | _but _item | kept)*
 _join: "and" | "," | "," "and" | _then | "and" _then | "," _then | "," "and" _then | _while | colon
+     | ","? "and"? "while" "you" "are" "at" "it" ","?
+
 _while: ","? _while_word "you"?
 _while_word: "while" | "whilst"
 colon: ":"
 _but: "but" | "," "but"
-_then: "then" | "after" "that" | "afterwards" | "next" | "finally" | "and" "finally"
+_then: ("then" | "after" "that" | "afterwards" | "next" | "finally" | "and" "finally") ","?
 _later: _item | ditto | kept
 ditto: dnp ("and" dnp)? _after?
 dnp: _the _mods noun                -> one
@@ -98,16 +103,25 @@ dnp: _the _mods noun                -> one
     | "it"                           -> it
 
 _item: state _after? | command | _lead state _after? | purpose
+     | topic "," command
+// the object named first, then what to do with it: "the far cup, knock it over"
+topic: _whichever? nps
+     | _whichever _mods noun "is" post+   -> topic_which
+_whichever: "whichever" | "which" "ever"
 purpose: command _so_that state _after?
        | _polite* _put nps _so_that state _after?      -> purpose_only
+       | ("so" "that" | "in" "order" "that") state "," command   -> purpose_first
 _so_that: "so" | "so" "that" | "," "so" | "," "so" "that" | "such" "that" | "in" "order" "that"
         | "until"
 _after: "any" "more" | "anymore" | "any" "longer" | "afterwards" | "in" "the" "end" | "at" "the" "end"
       | "again" | _too | "also"
 _lead: "first" | "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "that" | "see" "that"
      | "i" "want" | "i" "want" "that" | "i" "would" "like" | "i" "need" | "i" "expect"
-     | "the" "goal" "is" | "the" "goal" "is" "that" | "make" "it" "so" "that" | "i" "would" "like" "it" "if"
-     | "i" "want" "to" "see" | "i" "would" "like" "to" "see" | "let" "'s" "make" "sure"
+     | "the" "goal" "is" | "the" "goal" "is" "that" | "what" "i" "need" "is" | "what" "i" "want" "is"
+     | "what" "i" "would" "like" "is" | "all" "i" "want" "is" | "all" "i" "need" "is" | "i" "would" "love"
+     | "i" "would" "prefer" | "i" "would" "love" "to" "see" | "let" "'s" "have" | "let" "us" "have"
+     | "i" "would" "like" "to" "have" | "i" "want" "to" "have" | "make" "it" "so" "that" | "i" "would" "like" "it" "if"
+     | "make" "it" "so" | "is" "it" "possible" "to" "have" | "i" "want" "to" "see" | "i" "would" "like" "to" "see" | "let" "'s" "make" "sure"
 
 // ------------------------------------------------------------------ states
 state: nps _preds                    -> says
@@ -119,6 +133,14 @@ state: nps _preds                    -> says
      | _holder _holds nps            -> holds
      | _holder _holds_not nps        -> holds_not
      | _holder _empty                -> empty
+     | nps _placed complements       -> says_bare
+     | nps _causes nps complements   -> caused
+     | nps _causes nps "over"        -> caused_tip
+_placed: "sitting" | "resting" | "lying" | "placed" | "put" | "set" | "positioned" | "perched" | "balanced"
+       | "stacked" | "parked" | "moved" | "shifted" | "left" | "brought" | "taken" | "standing"
+// a state brought about by its subject: "(so that) it sweeps the cup off the table"
+_causes: "sweeps" | "pushes" | "knocks" | "throws" | "carries" | "takes" | "shoves" | "tips" | "brings"
+       | "moves" | "sends" | "drags" | "flicks"
 _so: "is" | "are" | "does" | "do"
 _too: "too" | "as" "well"
 _holder: "the" "gripper" | "the" "robot" | "the" "hand" | "the" "arm" | "you"
@@ -135,10 +157,12 @@ _preds: vp (_and vp)*
 _and: "and" | "," | "," "and" | "but"
 vp: head complements
   | _stand                           -> stands
+  | ("stay" | "stays" | "remain" | "remains") "up"  -> stands
   | _modal _stand_base               -> stands
   | _modal vstate                    -> vp_do
   | _modal "not" vstate              -> vp_dont
   | vstates                          -> vp_do
+  | vstate                           -> vp_do
   | _do "not" vstate                 -> vp_dont
 head: _pos                           -> yes
     | _modal "no" "longer" _be_base  -> nolonger
@@ -151,9 +175,10 @@ _neg: _modal "not" _be_base | _do "not" _verb_base | _modal "not" _verb_base | "
     | _do "not" _stand_base | _modal "not" _stand_base
 _be: "is" | "are" | "is" "still" | "are" "still" | "has" "been" | "have" "been" | "is" "now"
    | "are" "now" | "was" | "were" | "are" "both" | "are" "all" | "both" "are" | "all" "are"
+   | "gets" | "get" | "got" | "is" "getting" | "are" "getting"
 _have: "has" | "have"
-_be_base: "be" | "be" "still" | "end" "up" | "stay" | "remain" | "be" "left"
-_verb: "sits" | "sit" | "rests" | "rest" | "lies" | "lie" | "stays" | "stay" | "remains"
+_be_base: "be" | "be" "still" | "end" "up" | "stay" | "remain" | "be" "left" | "get"
+_verb: "goes" | "go" | "lands" | "land" | "sits" | "sit" | "rests" | "rest" | "lies" | "lie" | "stays" | "stay" | "remains"
      | "remain" | "ends" "up" | "end" "up" | "points" | "point" | "falls" | "fall" | "fell"
      | "rolls" | "roll" | "rolled" | "sat" | "lay"
 _verb_base: "sit" | "rest" | "lie" | "stay" | "remain" | "end" "up" | "point" | "fall" | "roll"
@@ -163,13 +188,16 @@ _modal: "should" | "must" | "has" "to" | "have" "to" | "needs" "to" | "need" "to
       | "shall" | "ought" "to" | "is" "to" | "are" "to" | "should" "now" | "must" "now"
 _do: "does" | "do" | "did"
 
-complements: _particle? comp (_and? comp)*
+complements: _particle? comp (_and? comp | "," _placed comp)*
 _particle: "down" | "back" | "back" "down" | "down" "again"
 comp: _on table                      -> on_table
     | _on nps                        -> on
-    | _end_at ("the" | "its") side "end" ("of" nps)?     -> on_end
+    | _end_at? ("the" | "its")? side "end" ("of" nps)?   -> on_end
+    | _end_at nps side "end"         -> on_end_named
     | _end_at nps "'s" side "end"    -> on_end_named
-    | _end_at ("the" | "its") _opposite "end" ("of" nps)? -> on_other_end
+    | _end_at ("the" | "its")? _opposite "end" ("of" nps)? -> on_other_end
+    | "to" _across                   -> across
+    | "to" _lengthwise               -> lengthwise
     | _on _ground                    -> off_table
     | _off table                     -> off_table
     | _off nps                       -> off
@@ -206,7 +234,7 @@ angle: "by"? degrees ("degrees" | "degree")?
      | "halfway"? "round"                -> half_turn
 !degrees: "30" | "45" | "60" | "90" | "120" | "135" | "180" | "270" | "360" | "ninety" | "quarter" | "half"
 _viewer: "the" "robot" | "you" | "me" | "the" "camera" | "us" | "the" "viewer" | "the" "arm"
-table: "the" "table" | "the" "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
+table: "the"? "table" | "the"? "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
 _ground: "the" "floor" | "the" "ground"
 _on: "on" | "onto" | "upon" | "atop" | "on" "top" "of" | "onto" "the" "top" "of" | "up" "on"
    | "up" "onto" | "on" "to" | "in" "place" "on" | "to" | "over" "to" | "across" "to" | "up" "to"
@@ -217,18 +245,18 @@ _left_of: "left" "of" | "to" "the" "left" "of" | "on" "the" "left" "of" | "on" "
         | "to" "the" "left" "side" "of" | "at" "the" "left" "of"
 _right_of: "right" "of" | "to" "the" "right" "of" | "on" "the" "right" "of"
          | "on" "the" "right" "side" "of" | "to" "the" "right" "side" "of" | "at" "the" "right" "of"
-_front_of: "in" "front" "of" | "nearer" "the" "camera" "than" | "nearer" "to" "the" "camera" "than"
-         | "closer" "to" "the" "camera" "than" | "before"
-_behind: "behind" | "in" "back" "of" | "at" "the" "back" "of" | "farther" "from" "the" "camera" "than"
-       | "further" "from" "the" "camera" "than" | "farther" "back" "than" | "further" "back" "than"
+_front_of: "in" "front" "of" | ("nearer" | "closer") "to"? _viewer "than" | "before"
+_behind: "behind" | "in" "back" "of" | "at" "the" "back" "of" | ("farther" | "further") "from" _viewer "than"
+       | "farther" "back" "than" | "further" "back" "than" | ("farther" | "further") "away" "than"
 _gone: "gone" | "hidden" | "out" "of" "sight" | "out" "of" "view" | "invisible" | "no" "longer" "there"
      | "no" "longer" "visible" | "away"
 _visible: "visible" | "in" "sight" | "in" "view" | "still" "there" | "still" "visible"
-_upright: "upright" | "standing" | "standing" "up" | "the" "right" "way" "up" | "right" "side" "up"
+_upright: "still" "up" | "still" "standing" | "still" "upright" | "upright" | "standing" | "standing" "up" | "the" "right" "way" "up" | "right" "side" "up"
         | "on" "its" "base" | "on" "its" "bottom" | "set" "upright" | "back" "up"
 _tipped: "tipped" "over" | "tipped" | "knocked" "over" | "knocked" "down" | "toppled" | "toppled" "over"
        | "fallen" "over" | "fell" "over" | "on" "its" "side" | "lying" "on" "its" "side" | "lying" "down"
        | "upside" "down" | "turned" "over" | "tipped" "on" "its" "side" | "over" "on" "its" "side"
+       | "tilted" | "tilted" "over" | "flipped" "over" | "overturned"
 _held: "held" | "in" "the" "gripper" | "in" "the" "robot" "'s" "hand" | "in" "the" "robot" "'s" "gripper"
      | "in" "the" "hand" | "in" "hand" | "picked" "up" | "being" "held" | "gripped" | "grasped"
      | "lifted" | "lifted" "up" | "in" "its" "gripper" | "in" "the" "air" | "carried"
@@ -241,9 +269,11 @@ _lengthwise: "lengthwise" | "lengthways" | "turned" "lengthwise" | "lying" "leng
 
 // verbs that say a state without a complement: "make the ball disappear"
 vstate: _vanish                           -> gone
+      | _vend complements                  -> vcomp
       | _toppling                         -> tipped
       | _fall_off table                   -> off_table
       | _fall_off nps                     -> off
+_vend: "end" "up" | "be" | "stay" | "sit" | "rest" | "lie" | "land" | "remain" | "wind" "up"
 _toppling: _fall_verb "over" | _fall_verb "down" | "topple" | "topple" "over" | "tip" "over" | "tip" | "fall"
 _fall_off: _fall_verb "off" | _fall_verb "off" "of"
 _vanish: "disappear" | "vanish" | "go" "away" | "go" "missing" | "leave" "the" "table"
@@ -279,11 +309,13 @@ command: _polite* action _tail?                        -> do
        | _polite* _dont action _tail?                  -> dont
        | _polite* action ","? "without" ing _tail?     -> without
 _polite: _courtesy ","?
-_courtesy: "please" | "can" "you" | "could" "you" | "would" "you" | "will" "you" | "i" "want" "you" "to"
+_courtesy: "can" "you" | "could" "you" | "would" "you" | "will" "you" | "i" "want" "you" "to"
          | "i" "need" "you" "to" | "i" "would" "like" "you" "to" | "robot" | "now" | "go" "ahead" "and"
          | "try" "to" | "kindly" | "you" "should" | "you" "must" | "go" "and" | "first" | "finally" | "just"
-         | "ok" | "okay" | "hey" | "lastly" | "next" | "also"
-_tail: "please" | "for" "me" | "thanks" | "thank" "you" | "now" | "," "please" | "," "thanks"
+         | "ok" | "okay" | "hey" | "lastly" | "next" | "also" | "would" "you" "be" "so" "kind" "as" "to"
+         | "be" "so" "kind" "as" "to" | "would" "you" "kindly" | "could" "you" "kindly" | "i" "would" "love" "you" "to"
+         | "do" "me" "a" "favour" "and" | "do" "me" "a" "favor" "and" | "hmm" | "um" | "well"
+_tail: "for" "me" | "thanks" | "thank" "you" | "now" | "," "thanks"
      | "right" "now" | "if" "you" "can" | _too | "also" | "," _too
 _dont: "do" "not" | "never" | "be" "careful" "not" "to" | "take" "care" "not" "to"
 action: _put nps complements                  -> put
@@ -291,8 +323,8 @@ action: _put nps complements                  -> put
       | _putdown nps "down"                   -> put_down
       | _putdown "down" nps                   -> put_down
       | _make nps vstate                      -> put
-      | _turn nps angle?                      -> turn
-      | _swap nps                             -> swap
+      | _turn nps angle? _direction?          -> turn
+      | _swap nps ("round" | "around" | "over")?  -> swap
       | _swap nps "with" nps                  -> swap
       | _swap "the" ("places" | "positions" | "spots") "of" nps -> swap
       | _hide nps (_hide_at nps)?             -> rid
@@ -301,9 +333,12 @@ action: _put nps complements                  -> put
       | _stand_verb "up" nps                  -> stand_up
       | "pick" "up" nps                       -> take
       | "pick" nps "up"                       -> take
+      | "pick" nps                            -> take
+      | "keep" nps "up"                       -> stand_up
       | _take nps                             -> take
       | _give "me" nps                        -> take
       | _give nps "a" degrees? _a_turn        -> turn
+      | _perform "a" degrees? _a_turn "with" nps -> turn_with
       | _clear "off"? nps                     -> clear
       | _clear nps "off"                      -> clear
       | _give nps "to" "me"                   -> take
@@ -317,11 +352,15 @@ action: _put nps complements                  -> put
       | _let_go nps                           -> release
 ing: _tip_ing "over" nps                      -> tip
    | _tip_ing nps "over"                      -> tip
-   | "toppling" nps                           -> tip
+   | _toppling_ing nps                        -> tip
    | _push_ing nps _off table                 -> rid
    | _push_ing nps _off nps                   -> ing_off
    | "dropping" nps                           -> rid
+_toppling_ing: "toppling" | "tipping" | "upsetting" | "overturning" | "knocking" "over" | "knocking" "down"
+_direction: "clockwise" | "counterclockwise" | "anticlockwise" | "counter" "clockwise" | "anti" "clockwise"
+          | "to" "the" ("left" | "right")
 _a_turn: "turn" | "twist" | "spin" | "rotation"
+_perform: "make" | "do" | "perform" | "execute"
 _clear: "clear" | "empty" | "unload" | "free" "up"
 _putdown: "put" | "set" | "lay" | "place"
 _make: "make" | "let" | "have" | "get"
@@ -333,7 +372,7 @@ _put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "c
     | "balance" | "transfer" | "shift" | "relocate" | "return" | "deposit" | "park" | "plop" | "plonk"
     | "raise" | "send" | "bump" | "tap" | "poke" | "hit" | "dump" | "perch" | "settle" | "let" | "center"
     | "centre" | "arrange" | "line" | "stick" | "land" | "clear"
-    | "shove" | "roll" | "throw" | "toss" | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
+    | "hold" | "chuck" | "straighten" | "align" | "square" | "shove" | "roll" | "throw" | "toss" | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
     | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
     | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
 _stand_verb: "stand"
@@ -346,13 +385,54 @@ _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect"
      | "raise" "up" | "pick" "out"
 _give: "hand" | "give" | "bring" | "pass" | "fetch"
 _tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
-_topple: "topple" | "upset" | "overturn"
-_rid: "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
+_topple: "topple" | "upset" | "overturn" | "tilt" | "tip"
+_rid: "chuck" | "ditch" | "bin" | "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
 _tip_ing: "knocking" | "tipping" | "pushing" | "turning"
 _push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
 
 """
 GRAMMAR = SENTENCES + NOUN_PHRASES
+
+# Courtesies that close a request, read past before parsing ("..., would you?", "thanks so
+# much", "that would be lovely"): in the grammar they cost a third of every parse's time.
+_MUCH = ("", "so much", "very much", "a lot", "in advance")
+_NICE = "lovely wonderful great nice perfect fantastic amazing helpful brilliant ideal good awesome appreciated"
+CODAS = tuple(
+    tuple(c.split())
+    for c in (
+        *(f"thanks {m}" for m in _MUCH),
+        *(f"thank you {m}" for m in _MUCH),
+        *(f"that would be {n}" for n in _NICE.split()),
+        *(f"{m} you" for m in ("would", "could", "will", "can")),
+        "pretty please", "if you would", "if you could", "if you do not mind", "nothing else", "cheers",
+        "instead", "if that is not too much trouble", "if it is not too much trouble",
+    )
+)  # fmt: skip
+
+
+_PAST = frozenset({"please", *(w for coda in CODAS for w in coda)})
+
+
+def _closed(said: list[str]) -> list[str]:
+    """The words without the courtesies that close them (`CODAS`), however many, and without
+    "please" wherever it stands: it asks for nothing ("the block across please, and ...")."""
+    said = _unpleased(said)
+    for coda in sorted(CODAS, key=len, reverse=True):
+        n = len(coda)
+        if len(said) > n and tuple(said[-n:]) == coda:
+            return _closed(said[: -n - (said[-n - 1] == ",")])
+    return said
+
+
+def _unpleased(said: list[str]) -> list[str]:
+    out: list[str] = []
+    for i, w in enumerate(said):
+        if w != "please":
+            out.append(w)
+        elif out and out[-1] == "," and (i + 1 == len(said) or said[i + 1] in (",", "and")):
+            out.pop()  # "X, please, and Y": one comma stays
+    return out
+
 
 MAX_PARSES = 64  # a sentence with more readings than this is refused as too tangled to read
 MAX_WORDS = 60  # and one longer than this, before its parses are counted (they grow fast)
@@ -380,8 +460,8 @@ def parser() -> Lark:
 
 
 def known_words() -> frozenset[str]:
-    """Every word the grammar reads."""
-    return _built()[1]
+    """Every word the grammar reads, and those read past (`CODAS`, "please")."""
+    return _built()[1] | _PAST
 
 
 def _minded(said: list[str], known: frozenset[str]) -> list[str]:
@@ -394,13 +474,60 @@ def _minded(said: list[str], known: frozenset[str]) -> list[str]:
             bases = (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "")
             base = next((b for b in bases if b in known), None)
             if base is not None:
-                return [*said[:i], "please", base, *_minded(said[i + 4 :], known)]
+                return [*said[:i], "please", base, *_minded(_and_based(said[i + 4 :], known), known)]
     return said
+
+
+def _and_based(said: list[str], known: frozenset[str]) -> list[str]:
+    """After "would you mind VERBing", each "and VERBing" in its base form too."""
+    out = list(said)
+    for i in range(1, len(out)):
+        if out[i - 1] == "and" and out[i].endswith("ing"):
+            stem = out[i][:-3]
+            base = next((b for b in (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "") if b in known), None)
+            out[i] = base or out[i]
+    return out
+
+
+_LETTERS = "abcdefghijklmnopqrstuvwxyz"
+
+
+def _one_slip(word: str) -> set[str]:
+    """Every string one slip of the keyboard from `word`: a letter dropped, added or changed,
+    or two neighbours swapped."""
+    cut = [(word[:i], word[i:]) for i in range(len(word) + 1)]
+    return {
+        *(a + b[1:] for a, b in cut if b),
+        *(a + b[1] + b[0] + b[2:] for a, b in cut if len(b) > 1),
+        *(a + c + b[1:] for a, b in cut if b for c in _LETTERS),
+        *(a + c + b for a, b in cut for c in _LETTERS),
+    }
+
+
+def spelt(word: str, known: frozenset[str]) -> str:
+    """`word` as the grammar knows it: itself, or the one known word a slip away (not guessed
+    between two, nor for words of fewer than three letters)."""
+    if word in known or len(word) < 3 or not word.isalpha():
+        return word
+    near = _one_slip(word) & known
+    return near.pop() if len(near) == 1 else word
 
 
 def read(text: str) -> list[tuple[Item, ...]]:
     """Every parse of `text`, as items in the order said; `Unread` if it has none."""
-    said = _minded(words(text), known_words())
+    typed = words(text)
+    fixed = [spelt(w, known_words()) for w in typed]
+    try:
+        return _readings(_minded(fixed, known_words()))
+    except Unread:
+        if fixed == typed:
+            raise
+    # what cannot be read is told in the words as typed, not as guessed
+    return _readings(_minded(typed, known_words()))
+
+
+def _readings(said: list[str]) -> list[tuple[Item, ...]]:
+    said = _closed(said)
     if not said:
         raise Unread("the goal sentence is empty", said, None)
     known = known_words()

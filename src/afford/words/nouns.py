@@ -38,10 +38,14 @@ nps: np
 shared: mod+
 np: det _mods noun _posts                -> np_one
   | det _mods nouns _posts               -> np_many
+  | _mods noun _posts                    -> one
+  | _mods nouns _posts                   -> every
   | "the" "other" number _posts          -> other_all
   | "the" "others"                       -> other_all
   | "it"                                 -> it
   | "them"                               -> them
+  | ("them" | "they") ("both" | "all")   -> them
+  | ("both" | "all") "of" "them"         -> them
   | "they"                               -> them
   | "everything"                         -> everything
   | _the _mods noun "'s" _mods noun _posts  -> owned_one
@@ -79,8 +83,14 @@ _posts: post*
     | _on np                             -> on
     | _on table                          -> on_table
     | _that head complements             -> that
-    | _near np                           -> nearest
+    | (_that "is")? _near np             -> nearest
+    | (_that "is")? _farthest np         -> farthest
+    | "with" "nothing" ("on" "it" | "on" "top" | "on" "top" "of" "it")?  -> bare
+    | _that _bearing "nothing" ("on" "it" | "on" "top")?               -> bare
+    | _that "is" bare
     | (_that "is")? _closest _viewer     -> viewer_near
+    | (_that "is")? ("further" | "farther") "back"      -> viewer_far
+    | (_that "is")? ("further" | "farther") "forward"   -> viewer_near
     | (_that "is")? _farthest _viewer    -> viewer_far
     | _except nps                        -> except_
     | _that? np _rests_on                -> bears
@@ -106,7 +116,7 @@ _near: "nearest" | "nearest" "to" | "closest" "to" | "next" "to" | "beside" | "n
 !place: "on" "the" "left" | "on" "the" "right" | "to" "the" "left" | "to" "the" "right"
             | "in" "the" "middle" | "in" "the" "centre" | "in" "the" "center" | "at" "the" "front"
             | "at" "the" "back" | "in" "front" | "at" "the" "left" | "at" "the" "right"
-            | "on" "the" "far" "left" | "on" "the" "far" "right"
+            | "on" "the" "far" "left" | "on" "the" "far" "right" | "on" "the"? "left" "side" | "on" "the"? "right" "side"
 """
 
 
@@ -154,6 +164,7 @@ class NounPhrases(Transformer):
         order: list[str] = []
         restrict: list[Pred] = []
         nearest: list[Noun] = []
+        farthest: list[Noun] = []
         bears: list[Noun] = []
         excluded: list[Noun] = []
         bare = False
@@ -174,6 +185,8 @@ class NounPhrases(Transformer):
                 from_right = x[1] == "right"
             elif x[0] == "nearest":
                 nearest.extend(x[1])
+            elif x[0] == "farthest":
+                farthest.extend(x[1])
             elif x[0] == "bare":
                 bare = True
             elif x[0] == "bears":
@@ -194,6 +207,7 @@ class NounPhrases(Transformer):
             other=other,
             excluded=tuple(excluded),
             bears=tuple(bears),
+            farthest=tuple(farthest),
         )
 
     def one(self, meta, c):
@@ -299,6 +313,9 @@ class NounPhrases(Transformer):
 
     def nearest(self, meta, c):
         return ("nearest", as_nouns(c[0]))
+
+    def farthest(self, meta, c):
+        return ("farthest", as_nouns(c[0]))
 
     def that(self, meta, c):
         head, preds = c

@@ -59,6 +59,27 @@ class Build(NounPhrases):
     def says_bare(self, meta, c):
         return Item(as_nouns(c[0]), c[1])
 
+    def topic(self, meta, c):
+        # "the far cup, knock it over": named first, for the pronoun of what follows
+        return Item(as_nouns(c[0]), (), instruction=True)
+
+    def topic_which(self, meta, c):  # "whichever cup is further back, ..."
+        return Item((self._noun(meta, c, "one"),), (), instruction=True)
+
+    def purpose_first(self, meta, c):
+        # "so that the cup ends up in front of the block, move it onto the table"
+        return (c[1], c[0])
+
+    def vcomp(self, meta, c):
+        return c[0]
+
+    def caused(self, meta, c):
+        # "it sweeps the cup off the table": a state of the object the subject acts on
+        return Item(as_nouns(c[1]), c[2])
+
+    def caused_tip(self, meta, c):
+        return Item(as_nouns(c[1]), (Pred("tipped"),))
+
     def ditto(self, meta, c):
         return Item(tuple(n for x in c for n in as_nouns(x)), None)
 
@@ -245,6 +266,9 @@ class Build(NounPhrases):
 
     def turn(self, meta, c):
         return as_nouns(c[0]), (Pred("turn", c[1] if len(c) > 1 else 90),)
+
+    def turn_with(self, meta, c):  # "make a quarter turn with the block"
+        return as_nouns(c[-1]), (Pred("turn", c[0] if len(c) > 1 else 90),)
 
     def swap(self, meta, c):
         return tuple(n for x in c for n in as_nouns(x)), (Pred("swap"),)

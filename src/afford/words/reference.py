@@ -135,10 +135,11 @@ def resolve(noun: Noun, state: State, context: _Context) -> list[int]:
         before = len(fits)
         fits = [k for k in fits if _holds_of(pred, k, state, context)]
         context.loose += before == 1
-    for other in noun.nearest:
-        before = len(fits)
-        fits = _nearest(noun, fits, other, state, context)
-        context.loose += before == 1
+    for far, others in ((False, noun.nearest), (True, noun.farthest)):
+        for other in others:
+            before = len(fits)
+            fits = _nearest(noun, fits, other, state, context, far)
+            context.loose += before == 1
     if kind is not None:  # "every cup except the middle one": the one is a cup
         context.kinds[role] = kind
     fits = _described(noun, fits, state, context)
@@ -213,8 +214,11 @@ def _holds_of(pred: Pred, k: int, state: State, context: _Context) -> bool:
     return all(f.holds(state) != pred.negated for f in facts)
 
 
-def _nearest(noun: Noun, fits: list[int], other: Noun, state: State, context: _Context) -> list[int]:
-    """The one of `fits` nearest `other` on the table, clearly nearer than the next."""
+def _nearest(
+    noun: Noun, fits: list[int], other: Noun, state: State, context: _Context, far: bool = False
+) -> list[int]:
+    """The one of `fits` nearest `other` on the table (`far`: farthest from it), clearly nearer
+    (farther) than the next."""
     if other.quantity == "it":
         raise Unresolved(f"{noun.words!r}: say what it is near by name", noun.words, own(noun))
     (o, *more) = _counted(other, resolve(other, state, context), state)
@@ -226,7 +230,8 @@ def _nearest(noun: Noun, fits: list[int], other: Noun, state: State, context: _C
         for k in fits
         if k != o and state.standing(k) and state.standing(o)
     )
-    if len(ranked) > 1 and ranked[1][0] - ranked[0][0] <= WORDS.beside:
+    ranked = ranked[::-1] if far else ranked
+    if len(ranked) > 1 and abs(ranked[1][0] - ranked[0][0]) <= WORDS.beside:
         raise Unresolved(
             f"{noun.words!r}: two objects are about as near; name it another way", noun.words, own(noun)
         )

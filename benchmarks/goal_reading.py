@@ -1,9 +1,8 @@
 """Goal reading speed: how long `parse` takes to read each sentence of the goal grammar's test
 sets in its scene, refusals (with their suggestion) included: the hand-written set
-(tests/goal_sentences.json) and the four written cold, without the grammar at hand
-(tests/goal_sentences_cold.json, tests/goal_sentences_heldout.json,
-tests/goal_sentences_heldout2.json, tests/goal_sentences_heldout3.json; their scenes are the
-first set's).
+(tests/goal_sentences.json) and those written cold, without the grammar at hand
+(tests/goal_sentences_cold.json, _heldout.json to _heldout5.json, _writers.json; their scenes
+are the first set's).
 
     python benchmarks/goal_reading.py [--repeats 3] [--sets NAME ...] [--json]
 
@@ -28,6 +27,8 @@ SETS = {
     "heldout": "goal_sentences_heldout.json",
     "heldout2": "goal_sentences_heldout2.json",
     "heldout3": "goal_sentences_heldout3.json",
+    "writers": "goal_sentences_writers.json",
+    "heldout4": "goal_sentences_heldout4.json",
 }
 TARGET_MS = 50.0
 

@@ -55,10 +55,15 @@ HELDOUT = json.loads((Path(__file__).parent / "goal_sentences_heldout.json").rea
 HELDOUT_FLOOR = 0.99  # of the held-out set read rightly or refused where meant: 100 of 101
 HELDOUT2 = json.loads((Path(__file__).parent / "goal_sentences_heldout2.json").read_text())
 HELDOUT2_FLOOR = 0.97  # 87 of 89 with the rules for its failure kinds
-# The third held-out set, written cold by a writer who never saw the grammar: measured once, at
-# 3b16099, 72 of 82; the grammar is not changed to fit it.
+# The third held-out set, measured once at 3b16099: 72 of 82; then development data.
 HELDOUT3 = json.loads((Path(__file__).parent / "goal_sentences_heldout3.json").read_text())
-HELDOUT3_FLOOR = 0.87  # measured once: 72 of 82
+HELDOUT3_FLOOR = 0.97  # 80 of 82 with the rules for its failure kinds
+# Three writers' 120 sentences each, in voices of their own (terse, chatty, varied): development data.
+WRITERS = json.loads((Path(__file__).parent / "goal_sentences_writers.json").read_text())
+WRITERS_FLOOR = 0.93  # 336 of 360; before any rule for them, 182 of 360
+# The fourth held-out set, measured once at db081a6: 84 of 90; then development data.
+HELDOUT4 = json.loads((Path(__file__).parent / "goal_sentences_heldout4.json").read_text())
+HELDOUT4_FLOOR = 0.98  # 89 of 90
 
 
 def as_goal(clauses: list[str]) -> list[str]:
@@ -104,17 +109,28 @@ def test_the_second_held_out_sentences_read_as_measured():
     assert share >= HELDOUT2_FLOOR, f"{share:.3f}\n" + "\n".join(wrong)
 
 
-def test_the_third_held_out_sentences_read_as_measured():
-    assert len(HELDOUT3["read"]) + len(HELDOUT3["refuse"]) >= 72
-    share, wrong = measured(HELDOUT3)
-    assert share >= HELDOUT3_FLOOR, f"{share:.3f}\n" + "\n".join(wrong)
-
-
 @pytest.mark.parametrize(
-    ("sentences", "floor"),
-    [(COLD, 1.0), (HELDOUT, HELDOUT_FLOOR), (HELDOUT2, HELDOUT2_FLOOR), (HELDOUT3, HELDOUT3_FLOOR)],
-    ids=["cold", "heldout", "heldout2", "heldout3"],
+    ("sentences", "floor", "at_least"),
+    [(HELDOUT3, HELDOUT3_FLOOR, 82), (WRITERS, WRITERS_FLOOR, 360), (HELDOUT4, HELDOUT4_FLOOR, 90)],
+    ids=["heldout3", "writers", "heldout4"],
 )
+def test_more_sentences_written_cold_read_as_measured(sentences, floor, at_least):
+    assert len(sentences["read"]) + len(sentences["refuse"]) >= at_least
+    share, wrong = measured(sentences)
+    assert share >= floor, f"{share:.3f}\n" + "\n".join(wrong)
+
+
+COLD_SETS = {
+    "cold": (COLD, 1.0),
+    "heldout": (HELDOUT, HELDOUT_FLOOR),
+    "heldout2": (HELDOUT2, HELDOUT2_FLOOR),
+    "heldout3": (HELDOUT3, HELDOUT3_FLOOR),
+    "writers": (WRITERS, WRITERS_FLOOR),
+    "heldout4": (HELDOUT4, HELDOUT4_FLOOR),
+}
+
+
+@pytest.mark.parametrize(("sentences", "floor"), list(COLD_SETS.values()), ids=list(COLD_SETS))
 def test_every_refusal_is_one_line_with_a_sentence_that_reads(sentences, floor):
     """Each refusal of a cold set, meant or not, offers a reading a person would write: a
     sentence (it has a verb, as every goal the grammar reads as a sentence does), written as

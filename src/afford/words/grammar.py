@@ -109,8 +109,9 @@ topic: _whichever? nps
      | _whichever _mods noun "is" post+   -> topic_which
 _whichever: "whichever" | "which" "ever"
 purpose: command _so_that state _after?
-       | _polite* _put nps _so_that state _after?      -> purpose_only
+       | _polite* _put nps _out? _so_that state _after?  -> purpose_only
        | ("so" "that" | "in" "order" "that") state "," command   -> purpose_first
+_out: "out" | "around" | "round"
 _so_that: "so" | "so" "that" | "," "so" | "," "so" "that" | "such" "that" | "in" "order" "that"
         | "until"
 _after: "any" "more" | "anymore" | "any" "longer" | "afterwards" | "in" "the" "end" | "at" "the" "end"
@@ -178,7 +179,7 @@ _be: "is" | "are" | "is" "still" | "are" "still" | "has" "been" | "have" "been" 
    | "gets" | "get" | "got" | "is" "getting" | "are" "getting"
 _have: "has" | "have"
 _be_base: "be" | "be" "still" | "end" "up" | "stay" | "remain" | "be" "left" | "get"
-_verb: "goes" | "go" | "lands" | "land" | "sits" | "sit" | "rests" | "rest" | "lies" | "lie" | "stays" | "stay" | "remains"
+_verb: "runs" | "run" | "goes" | "go" | "lands" | "land" | "sits" | "sit" | "rests" | "rest" | "lies" | "lie" | "stays" | "stay" | "remains"
      | "remain" | "ends" "up" | "end" "up" | "points" | "point" | "falls" | "fall" | "fell"
      | "rolls" | "roll" | "rolled" | "sat" | "lay"
 _verb_base: "sit" | "rest" | "lie" | "stay" | "remain" | "end" "up" | "point" | "fall" | "roll"
@@ -234,7 +235,7 @@ angle: "by"? degrees ("degrees" | "degree")?
      | "halfway"? "round"                -> half_turn
 !degrees: "30" | "45" | "60" | "90" | "120" | "135" | "180" | "270" | "360" | "ninety" | "quarter" | "half"
 _viewer: "the" "robot" | "you" | "me" | "the" "camera" | "us" | "the" "viewer" | "the" "arm"
-table: "the"? "table" | "the"? "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
+table: "the"? "table" | "the" ("edge" | "side") "of" "the" "table" | "the"? "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
 _ground: "the" "floor" | "the" "ground"
 _on: "on" | "onto" | "upon" | "atop" | "on" "top" "of" | "onto" "the" "top" "of" | "up" "on"
    | "up" "onto" | "on" "to" | "in" "place" "on" | "to" | "over" "to" | "across" "to" | "up" "to"
@@ -298,9 +299,9 @@ _keep: "keep" | "stop" | "prevent"
 _fall_verb: "fall" | "roll" | "drop" | "slip" | "slide" | "tumble" | "get" "knocked" | "be" "knocked"
 
 // a state said beside an instruction: "..., keeping the cup upright", "while holding the ball"
-kept: _keeping nps complements               -> says_bare
+kept: _keeping nps "still"? complements      -> says_bare
     | _holding nps                           -> holds
-_keeping: "keeping" | "leaving"
+_keeping: "keeping" | "leaving" | "with"
 _holding: "holding" | "still" "holding" | "keeping" "hold" "of" | "gripping" | "carrying"
 
 // ------------------------------------------------------------------ instructions
@@ -427,6 +428,8 @@ def _closed(said: list[str]) -> list[str]:
 def _unpleased(said: list[str]) -> list[str]:
     out: list[str] = []
     for i, w in enumerate(said):
+        if w == "pretty" and said[i + 1 : i + 2] == ["please"]:
+            continue
         if w != "please":
             out.append(w)
         elif out and out[-1] == "," and (i + 1 == len(said) or said[i + 1] in (",", "and")):

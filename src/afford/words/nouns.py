@@ -103,8 +103,7 @@ _posts: post*
     | "from" "the" side                  -> counted_from
 _that: "that" | "which"
 _closest: "nearest" | "nearest" "to" | "closest" "to" | "nearer" "to" | "closer" "to" | "next" "to"
-_farthest: "farthest" "from" | "furthest" "from" | "farther" "from" | "further" "from" | "far" "from"
-         | "away" "from"
+_farthest: ("farthest" | "furthest" | "farther" | "further" | "far") "away"? "from" | "away" "from"
 _bearing: "has" | "holds" | "carries" | "supports" | "holding" | "carrying" | "supporting" | "bearing"
         | "having"
 _except: "but" | "except" | "except" "for" | "other" "than" | "apart" "from" | "besides" | "save"

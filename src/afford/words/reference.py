@@ -427,7 +427,12 @@ def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...
         if Clause(c.fact, not c.negated) in kept:
             subject = _listed(state, [c.fact.subject])
             raise Unresolved(f"it says both that {subject} is {SAID[c.fact.relation]} and that it is not")
-    return tuple(kept)
+    # on an end of the block is on the block: saying both is one goal ("the ball on the block's left end")
+    ends = {c.fact.subject for c in kept if c.fact.relation == "on_end" and not c.negated}
+    block = [k for k in state.members if state.kind(k) == "block"]
+    return tuple(
+        c for c in kept if not (c.fact.relation == "on" and not c.negated and c.fact.subject in ends and c.fact.other in block)
+    )
 
 
 def understand(text: str, state: State) -> tuple[Clause, ...]:

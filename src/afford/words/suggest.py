@@ -103,13 +103,12 @@ def nearest(
         )
         # one object in the place of several ("both cups are ..."): the verb agrees with it
         tries += [text.replace(phrase, n, 1).replace(f"{n} are ", f"{n} is ") for _, n in named]
-    # a sentence stays one: a swapped or dropped word must not leave a phrase ("the ball gone
-    # on the block" reads as a verbless state, and no person writes it)
+    # a suggestion is a sentence: a verbless phrase reads ("cup on the support", "the ball gone
+    # on the block"), but it is not what one offers a person to write
     verb_words = verbs()
-    sentence = any(w in verb_words for w in said)
     budget = WORDS_TRIED - len(said)
     for t in list(dict.fromkeys(" ".join(t.split()) for t in tries))[:TRIES]:
-        if not t or t == text or (sentence and not any(w in verb_words for w in t.split())):
+        if not t or t == text or not any(w in verb_words for w in t.split()):
             continue
         budget -= len(t.split())
         if budget < 0:

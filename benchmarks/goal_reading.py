@@ -29,6 +29,7 @@ SETS = {
     "heldout3": "goal_sentences_heldout3.json",
     "writers": "goal_sentences_writers.json",
     "heldout4": "goal_sentences_heldout4.json",
+    "heldout5": "goal_sentences_heldout5.json",
 }
 TARGET_MS = 50.0
 

@@ -64,6 +64,9 @@ WRITERS_FLOOR = 0.93  # 336 of 360; before any rule for them, 182 of 360
 # The fourth held-out set, measured once at db081a6: 84 of 90; then development data.
 HELDOUT4 = json.loads((Path(__file__).parent / "goal_sentences_heldout4.json").read_text())
 HELDOUT4_FLOOR = 0.98  # 89 of 90
+# The fifth held-out set, 120 sentences, measured once at 1e9cbf1: 107 of 120, the honest figure.
+HELDOUT5 = json.loads((Path(__file__).parent / "goal_sentences_heldout5.json").read_text())
+HELDOUT5_FLOOR = 0.89
 
 
 def as_goal(clauses: list[str]) -> list[str]:
@@ -111,8 +114,13 @@ def test_the_second_held_out_sentences_read_as_measured():
 
 @pytest.mark.parametrize(
     ("sentences", "floor", "at_least"),
-    [(HELDOUT3, HELDOUT3_FLOOR, 82), (WRITERS, WRITERS_FLOOR, 360), (HELDOUT4, HELDOUT4_FLOOR, 90)],
-    ids=["heldout3", "writers", "heldout4"],
+    [
+        (HELDOUT3, HELDOUT3_FLOOR, 82),
+        (WRITERS, WRITERS_FLOOR, 360),
+        (HELDOUT4, HELDOUT4_FLOOR, 90),
+        (HELDOUT5, HELDOUT5_FLOOR, 120),
+    ],
+    ids=["heldout3", "writers", "heldout4", "heldout5"],
 )
 def test_more_sentences_written_cold_read_as_measured(sentences, floor, at_least):
     assert len(sentences["read"]) + len(sentences["refuse"]) >= at_least
@@ -127,6 +135,7 @@ COLD_SETS = {
     "heldout3": (HELDOUT3, HELDOUT3_FLOOR),
     "writers": (WRITERS, WRITERS_FLOOR),
     "heldout4": (HELDOUT4, HELDOUT4_FLOOR),
+    "heldout5": (HELDOUT5, HELDOUT5_FLOOR),
 }
 
 

@@ -34,11 +34,25 @@ _CONTRACTIONS = (
 )
 
 
-# Chat spellings, spelt out as contractions are (a misspelt word is not guessed: it is refused
-# with the spelling that reads offered).
-_SPELT = {"u": "you", "pls": "please", "plz": "please", "thx": "thanks", "ur": "your", "r": "are", "thats": "that is",
-          "dont": "do not", "doesnt": "does not", "isnt": "is not", "cant": "can not", "wont": "will not",
-          "shouldnt": "should not", "im": "i am", "lets": "let 's", "whats": "what is"}
+# Chat spellings, spelt out as contractions are (a slip of the keys is `grammar.spelt`'s).
+_SPELT = {
+    "u": "you",
+    "pls": "please",
+    "plz": "please",
+    "thx": "thanks",
+    "ur": "your",
+    "r": "are",
+    "thats": "that is",
+    "dont": "do not",
+    "doesnt": "does not",
+    "isnt": "is not",
+    "cant": "can not",
+    "wont": "will not",
+    "shouldnt": "should not",
+    "im": "i am",
+    "lets": "let 's",
+    "whats": "what is",
+}
 
 
 def words(text: str) -> list[str]:

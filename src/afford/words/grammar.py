@@ -121,8 +121,10 @@ _lead: "first" | "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "tha
      | "the" "goal" "is" | "the" "goal" "is" "that" | "what" "i" "need" "is" | "what" "i" "want" "is"
      | "what" "i" "would" "like" "is" | "all" "i" "want" "is" | "all" "i" "need" "is" | "i" "would" "love"
      | "i" "would" "prefer" | "i" "would" "love" "to" "see" | "let" "'s" "have" | "let" "us" "have"
-     | "i" "would" "like" "to" "have" | "i" "want" "to" "have" | "make" "it" "so" "that" | "i" "would" "like" "it" "if"
-     | "make" "it" "so" | "is" "it" "possible" "to" "have" | "i" "want" "to" "see" | "i" "would" "like" "to" "see" | "let" "'s" "make" "sure"
+     | "i" "would" "like" "to" "have" | "i" "want" "to" "have" | "make" "it" "so" "that"
+     | "i" "would" "like" "it" "if"
+     | "make" "it" "so" | "is" "it" "possible" "to" "have" | "i" "want" "to" "see"
+     | "i" "would" "like" "to" "see" | "let" "'s" "make" "sure"
 
 // ------------------------------------------------------------------ states
 state: nps _preds                    -> says
@@ -179,7 +181,8 @@ _be: "is" | "are" | "is" "still" | "are" "still" | "has" "been" | "have" "been" 
    | "gets" | "get" | "got" | "is" "getting" | "are" "getting"
 _have: "has" | "have"
 _be_base: "be" | "be" "still" | "end" "up" | "stay" | "remain" | "be" "left" | "get"
-_verb: "runs" | "run" | "goes" | "go" | "lands" | "land" | "sits" | "sit" | "rests" | "rest" | "lies" | "lie" | "stays" | "stay" | "remains"
+_verb: "runs" | "run" | "goes" | "go" | "lands" | "land" | "sits" | "sit" | "rests" | "rest" | "lies"
+     | "lie" | "stays" | "stay" | "remains"
      | "remain" | "ends" "up" | "end" "up" | "points" | "point" | "falls" | "fall" | "fell"
      | "rolls" | "roll" | "rolled" | "sat" | "lay"
 _verb_base: "sit" | "rest" | "lie" | "stay" | "remain" | "end" "up" | "point" | "fall" | "roll"
@@ -235,7 +238,8 @@ angle: "by"? degrees ("degrees" | "degree")?
      | "halfway"? "round"                -> half_turn
 !degrees: "30" | "45" | "60" | "90" | "120" | "135" | "180" | "270" | "360" | "ninety" | "quarter" | "half"
 _viewer: "the" "robot" | "you" | "me" | "the" "camera" | "us" | "the" "viewer" | "the" "arm"
-table: "the"? "table" | "the" ("edge" | "side") "of" "the" "table" | "the"? "tabletop" | "the" "table" "top" | "the" "table" "'s" "top"
+table: "the"? "table" | "the" ("edge" | "side") "of" "the" "table" | "the"? "tabletop"
+     | "the" "table" "top" | "the" "table" "'s" "top"
 _ground: "the" "floor" | "the" "ground"
 _on: "on" | "onto" | "upon" | "atop" | "on" "top" "of" | "onto" "the" "top" "of" | "up" "on"
    | "up" "onto" | "on" "to" | "in" "place" "on" | "to" | "over" "to" | "across" "to" | "up" "to"
@@ -252,7 +256,8 @@ _behind: "behind" | "in" "back" "of" | "at" "the" "back" "of" | ("farther" | "fu
 _gone: "gone" | "hidden" | "out" "of" "sight" | "out" "of" "view" | "invisible" | "no" "longer" "there"
      | "no" "longer" "visible" | "away"
 _visible: "visible" | "in" "sight" | "in" "view" | "still" "there" | "still" "visible"
-_upright: "still" "up" | "still" "standing" | "still" "upright" | "upright" | "standing" | "standing" "up" | "the" "right" "way" "up" | "right" "side" "up"
+_upright: "still" "up" | "still" "standing" | "still" "upright" | "upright" | "standing"
+        | "standing" "up" | "the" "right" "way" "up" | "right" "side" "up"
         | "on" "its" "base" | "on" "its" "bottom" | "set" "upright" | "back" "up"
 _tipped: "tipped" "over" | "tipped" | "knocked" "over" | "knocked" "down" | "toppled" | "toppled" "over"
        | "fallen" "over" | "fell" "over" | "on" "its" "side" | "lying" "on" "its" "side" | "lying" "down"
@@ -314,7 +319,8 @@ _courtesy: "can" "you" | "could" "you" | "would" "you" | "will" "you" | "i" "wan
          | "i" "need" "you" "to" | "i" "would" "like" "you" "to" | "robot" | "now" | "go" "ahead" "and"
          | "try" "to" | "kindly" | "you" "should" | "you" "must" | "go" "and" | "first" | "finally" | "just"
          | "ok" | "okay" | "hey" | "lastly" | "next" | "also" | "would" "you" "be" "so" "kind" "as" "to"
-         | "be" "so" "kind" "as" "to" | "would" "you" "kindly" | "could" "you" "kindly" | "i" "would" "love" "you" "to"
+         | "be" "so" "kind" "as" "to" | "would" "you" "kindly" | "could" "you" "kindly"
+         | "i" "would" "love" "you" "to"
          | "do" "me" "a" "favour" "and" | "do" "me" "a" "favor" "and" | "hmm" | "um" | "well"
 _tail: "for" "me" | "thanks" | "thank" "you" | "now" | "," "thanks"
      | "right" "now" | "if" "you" "can" | _too | "also" | "," _too
@@ -373,7 +379,8 @@ _put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "c
     | "balance" | "transfer" | "shift" | "relocate" | "return" | "deposit" | "park" | "plop" | "plonk"
     | "raise" | "send" | "bump" | "tap" | "poke" | "hit" | "dump" | "perch" | "settle" | "let" | "center"
     | "centre" | "arrange" | "line" | "stick" | "land" | "clear"
-    | "hold" | "chuck" | "straighten" | "align" | "square" | "shove" | "roll" | "throw" | "toss" | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
+    | "hold" | "chuck" | "straighten" | "align" | "square" | "shove" | "roll" | "throw" | "toss"
+    | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
     | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
     | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
 _stand_verb: "stand"
@@ -387,7 +394,8 @@ _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect"
 _give: "hand" | "give" | "bring" | "pass" | "fetch"
 _tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
 _topple: "topple" | "upset" | "overturn" | "tilt" | "tip"
-_rid: "chuck" | "ditch" | "bin" | "remove" | "get" "rid" "of" | "dispose" "of" | "discard" | "clear" "away" | "eliminate"
+_rid: "chuck" | "ditch" | "bin" | "remove" | "get" "rid" "of" | "dispose" "of" | "discard"
+    | "clear" "away" | "eliminate"
 _tip_ing: "knocking" | "tipping" | "pushing" | "turning"
 _push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
 
@@ -397,7 +405,9 @@ GRAMMAR = SENTENCES + NOUN_PHRASES
 # Courtesies that close a request, read past before parsing ("..., would you?", "thanks so
 # much", "that would be lovely"): in the grammar they cost a third of every parse's time.
 _MUCH = ("", "so much", "very much", "a lot", "in advance")
-_NICE = "lovely wonderful great nice perfect fantastic amazing helpful brilliant ideal good awesome appreciated"
+_NICE = (
+    "lovely wonderful great nice perfect fantastic amazing helpful brilliant ideal good awesome appreciated"
+)
 CODAS = tuple(
     tuple(c.split())
     for c in (
@@ -487,7 +497,10 @@ def _and_based(said: list[str], known: frozenset[str]) -> list[str]:
     for i in range(1, len(out)):
         if out[i - 1] == "and" and out[i].endswith("ing"):
             stem = out[i][:-3]
-            base = next((b for b in (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "") if b in known), None)
+            base = next(
+                (b for b in (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "") if b in known),
+                None,
+            )
             out[i] = base or out[i]
     return out
 

@@ -115,7 +115,8 @@ _near: "nearest" | "nearest" "to" | "closest" "to" | "next" "to" | "beside" | "n
 !place: "on" "the" "left" | "on" "the" "right" | "to" "the" "left" | "to" "the" "right"
             | "in" "the" "middle" | "in" "the" "centre" | "in" "the" "center" | "at" "the" "front"
             | "at" "the" "back" | "in" "front" | "at" "the" "left" | "at" "the" "right"
-            | "on" "the" "far" "left" | "on" "the" "far" "right" | "on" "the"? "left" "side" | "on" "the"? "right" "side"
+            | "on" "the" "far" "left" | "on" "the" "far" "right" | "on" "the"? "left" "side"
+            | "on" "the"? "right" "side"
 """
 
 

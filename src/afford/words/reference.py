@@ -431,7 +431,11 @@ def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...
     ends = {c.fact.subject for c in kept if c.fact.relation == "on_end" and not c.negated}
     block = [k for k in state.members if state.kind(k) == "block"]
     return tuple(
-        c for c in kept if not (c.fact.relation == "on" and not c.negated and c.fact.subject in ends and c.fact.other in block)
+        c
+        for c in kept
+        if not (
+            c.fact.relation == "on" and not c.negated and c.fact.subject in ends and c.fact.other in block
+        )
     )
 
 

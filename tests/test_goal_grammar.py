@@ -64,9 +64,9 @@ WRITERS_FLOOR = 0.93  # 336 of 360; before any rule for them, 182 of 360
 # The fourth held-out set, measured once at db081a6: 84 of 90; then development data.
 HELDOUT4 = json.loads((Path(__file__).parent / "goal_sentences_heldout4.json").read_text())
 HELDOUT4_FLOOR = 0.98  # 89 of 90
-# The fifth held-out set, 120 sentences, measured once at 1e9cbf1: 107 of 120, the honest figure.
+# The fifth held-out set, 120 sentences, measured once at 1e9cbf1: 107 of 120; then development data.
 HELDOUT5 = json.loads((Path(__file__).parent / "goal_sentences_heldout5.json").read_text())
-HELDOUT5_FLOOR = 0.89
+HELDOUT5_FLOOR = 0.98  # 118 of 120
 
 
 def as_goal(clauses: list[str]) -> list[str]:

@@ -52,6 +52,7 @@ _SPELT = {
     "im": "i am",
     "lets": "let 's",
     "whats": "what is",
+    "n": "and",
 }
 
 

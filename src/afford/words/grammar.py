@@ -63,16 +63,17 @@ Where what people say could mean two things, one rule decides, whatever the sent
   and a pick-up said before them is on the way.
 - What follows a colon says what the pronouns of the item before it name ("swap them: the
   ball on the block and the cup on the support").
-- A misspelt word is read as the one known word a single slip away (a letter dropped, added,
-  changed, or two swapped: "blok", "teh", "lenghtwise"), where there is exactly one and the
-  word has at least three letters; the reading shown says which word was read. Otherwise it is
-  refused, with the sentence spelt right offered. Chat spellings ("u", "pls") are spelt out as
-  contractions are.
+- A misspelt word is read as a known word a single slip away (a letter dropped, added,
+  changed, or two swapped: "blok", "teh", "lenghtwise") where, of the sentence's spellings so
+  made, exactly one reads ("fron" is "front" in "in fron of the cup", not "from"); the reading
+  shown says which word was read. Otherwise it is refused, with the sentence spelt right
+  offered. Chat spellings ("u", "pls") are spelt out as contractions are.
 """
 
 from __future__ import annotations
 
 import functools
+import itertools
 
 from lark import Lark
 from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken
@@ -102,8 +103,10 @@ dnp: _the _mods noun                -> one
     | "the" "other" "one"            -> other_one
     | "it"                           -> it
 
-_item: state _after? | command | _lead state _after? | purpose
+_item: state _after? | command | _lead state _after? | purpose | unwanted
      | topic "," command
+unwanted: _lead_not state _after?
+_lead_not: "i" ("do" | "would") "not" ("want" | "like") | "i" "would" "rather" "not" "have"
 // the object named first, then what to do with it: "the far cup, knock it over"
 topic: _whichever? nps
      | _whichever _mods noun "is" post+   -> topic_which
@@ -128,6 +131,7 @@ _lead: "first" | "make" "sure" | "make" "sure" "that" | "ensure" | "ensure" "tha
 
 // ------------------------------------------------------------------ states
 state: nps _preds                    -> says
+     | _ask nps _go_base complements -> says_asked
      | nps complements               -> says_bare
      | "so" _so nps                  -> ditto
      | "as" _so nps                  -> ditto
@@ -139,6 +143,9 @@ state: nps _preds                    -> says
      | nps _placed complements       -> says_bare
      | nps _causes nps complements   -> caused
      | nps _causes nps "over"        -> caused_tip
+// a question that asks for a state: "can the cup go behind the ball?"
+_ask: "can" | "could" | "will" | "would"
+_go_base: "go" | "be" | "end" "up" | "sit" | "rest" | "lie" | "stay" | "land"
 _placed: "sitting" | "resting" | "lying" | "placed" | "put" | "set" | "positioned" | "perched" | "balanced"
        | "stacked" | "parked" | "moved" | "shifted" | "left" | "brought" | "taken" | "standing"
 // a state brought about by its subject: "(so that) it sweeps the cup off the table"
@@ -196,7 +203,7 @@ complements: _particle? comp (_and? comp | "," _placed comp)*
 _particle: "down" | "back" | "back" "down" | "down" "again"
 comp: _on table                      -> on_table
     | _on nps                        -> on
-    | _end_at? ("the" | "its")? side "end" ("of" nps)?   -> on_end
+    | _end_at? ("the" | "its")? side "hand"? "end" ("of" nps)?   -> on_end
     | _end_at nps side "end"         -> on_end_named
     | _end_at nps "'s" side "end"    -> on_end_named
     | _end_at ("the" | "its")? _opposite "end" ("of" nps)? -> on_other_end
@@ -270,7 +277,8 @@ _across: "across" | "across" "the" "table" | "turned" "across" | "lying" "across
        | "crosswise" | "crossways"
        | "from" "left" "to" "right" | "side" "to" "side"
 _lengthwise: "lengthwise" | "lengthways" | "turned" "lengthwise" | "lying" "lengthwise" | "front" "to" "back"
-           | "away" "from" _viewer | "pointing" "away" "from" _viewer | "pointing" "away" | "towards" _viewer
+           | "straight"? "away" "from" _viewer | "pointing" "straight"? "away" "from" _viewer
+           | "pointing" "away" | "towards" _viewer
            | "toward" _viewer | "pointing" "towards" _viewer | "pointing" "toward" _viewer
 
 // verbs that say a state without a complement: "make the ball disappear"
@@ -304,7 +312,7 @@ _keep: "keep" | "stop" | "prevent"
 _fall_verb: "fall" | "roll" | "drop" | "slip" | "slide" | "tumble" | "get" "knocked" | "be" "knocked"
 
 // a state said beside an instruction: "..., keeping the cup upright", "while holding the ball"
-kept: _keeping nps "still"? complements      -> says_bare
+kept: _keeping nps "still"? _placed? complements  -> says_bare
     | _holding nps                           -> holds
 _keeping: "keeping" | "leaving" | "with"
 _holding: "holding" | "still" "holding" | "keeping" "hold" "of" | "gripping" | "carrying"
@@ -315,7 +323,8 @@ command: _polite* action _tail?                        -> do
        | _polite* _dont action _tail?                  -> dont
        | _polite* action ","? "without" ing _tail?     -> without
 _polite: _courtesy ","?
-_courtesy: "can" "you" | "could" "you" | "would" "you" | "will" "you" | "i" "want" "you" "to"
+_courtesy: "is" "it" "possible" "to" | "can" "you" | "could" "you" | "would" "you" | "will" "you"
+         | "i" "want" "you" "to"
          | "i" "need" "you" "to" | "i" "would" "like" "you" "to" | "robot" | "now" | "go" "ahead" "and"
          | "try" "to" | "kindly" | "you" "should" | "you" "must" | "go" "and" | "first" | "finally" | "just"
          | "ok" | "okay" | "hey" | "lastly" | "next" | "also" | "would" "you" "be" "so" "kind" "as" "to"
@@ -389,7 +398,8 @@ _keep_holding: "keep" "holding" | "keep" "hold" "of" | "keep" "a" "hold" "of" | 
              | "hang" "on" "to" | "go" "on" "holding" | "stay" "holding"
 _let_go: "let" "go" "of" | "release" | "drop"
 _take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect" | "grip" | "lift" "up"
-     | "hold" "on" "to" | "seize" | "catch" | "snatch" | "take" "hold" "of" | "grab" "hold" "of" | "hold" "up"
+     | "hold" "on" "to" | "hold" "onto" | "seize" | "catch" | "snatch" | "take" "hold" "of"
+     | "grab" "hold" "of" | "hold" "up"
      | "raise" "up" | "pick" "out"
 _give: "hand" | "give" | "bring" | "pass" | "fetch"
 _tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
@@ -520,26 +530,35 @@ def _one_slip(word: str) -> set[str]:
     }
 
 
-def spelt(word: str, known: frozenset[str]) -> str:
-    """`word` as the grammar knows it: itself, or the one known word a slip away (not guessed
-    between two, nor for words of fewer than three letters)."""
+def spellings(word: str, known: frozenset[str]) -> list[str]:
+    """`word` as the grammar may know it: itself, or the known words a slip away (none guessed
+    for words of fewer than three letters)."""
     if word in known or len(word) < 3 or not word.isalpha():
-        return word
-    near = _one_slip(word) & known
-    return near.pop() if len(near) == 1 else word
+        return [word]
+    return sorted(_one_slip(word) & known) or [word]
+
+
+MAX_RESPELLINGS = 4  # sentences tried with the misspelt words' candidates (each a parse)
 
 
 def read(text: str) -> list[tuple[Item, ...]]:
-    """Every parse of `text`, as items in the order said; `Unread` if it has none."""
+    """Every parse of `text`, as items in the order said; `Unread` if it has none. A misspelt
+    word is read as the known word a slip away with which the sentence reads, where exactly one
+    spelling of the sentence does."""
     typed = words(text)
-    fixed = [spelt(w, known_words()) for w in typed]
-    try:
-        return _readings(_minded(fixed, known_words()))
-    except Unread:
-        if fixed == typed:
-            raise
+    known = known_words()
+    respelt = [list(t) for t in itertools.islice(itertools.product(*(spellings(w, known) for w in typed)), 8)]
+    if respelt != [typed] and len(respelt) <= MAX_RESPELLINGS:
+        read_as = []
+        for said in respelt:
+            try:
+                read_as.append(_readings(_minded(said, known)))
+            except Unread:
+                pass
+        if len(read_as) == 1:
+            return read_as[0]
     # what cannot be read is told in the words as typed, not as guessed
-    return _readings(_minded(typed, known_words()))
+    return _readings(_minded(typed, known))
 
 
 def _readings(said: list[str]) -> list[tuple[Item, ...]]:

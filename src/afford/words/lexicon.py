@@ -48,6 +48,7 @@ ORDER = {
     "rightmost": ("x", -1),
     "last": ("x", -1),
     "middle": ("x", None),
+    "mid": ("x", None),
     "centre": ("x", None),
     "center": ("x", None),
     "central": ("x", None),

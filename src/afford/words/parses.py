@@ -73,6 +73,12 @@ class Build(NounPhrases):
     def vcomp(self, meta, c):
         return c[0]
 
+    def unwanted(self, meta, c):  # "I don't want the ball on the support": its state denied
+        return replace(c[0], preds=_negate(c[0].preds))
+
+    def says_asked(self, meta, c):  # "can the cup go behind the ball?"
+        return Item(as_nouns(c[0]), c[1])
+
     def caused(self, meta, c):
         # "it sweeps the cup off the table": a state of the object the subject acts on
         return Item(as_nouns(c[1]), c[2])

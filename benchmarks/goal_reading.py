@@ -1,7 +1,7 @@
 """Goal reading speed: how long `parse` takes to read each sentence of the goal grammar's test
 sets in its scene, refusals (with their suggestion) included: the hand-written set
 (tests/goal_sentences.json) and those written cold, without the grammar at hand
-(tests/goal_sentences_cold.json, _heldout.json to _heldout5.json, _writers.json; their scenes
+(tests/goal_sentences_cold.json, _heldout.json to _heldout6.json, _writers.json; their scenes
 are the first set's).
 
     python benchmarks/goal_reading.py [--repeats 3] [--sets NAME ...] [--json]
@@ -30,6 +30,7 @@ SETS = {
     "writers": "goal_sentences_writers.json",
     "heldout4": "goal_sentences_heldout4.json",
     "heldout5": "goal_sentences_heldout5.json",
+    "heldout6": "goal_sentences_heldout6.json",
 }
 TARGET_MS = 50.0
 

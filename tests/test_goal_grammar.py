@@ -67,6 +67,9 @@ HELDOUT4_FLOOR = 0.98  # 89 of 90
 # The fifth held-out set, 120 sentences, measured once at 1e9cbf1: 107 of 120; then development data.
 HELDOUT5 = json.loads((Path(__file__).parent / "goal_sentences_heldout5.json").read_text())
 HELDOUT5_FLOOR = 0.98  # 118 of 120
+# The sixth held-out set, 120 sentences, measured once at 84e8047: 101 of 120, the honest figure.
+HELDOUT6 = json.loads((Path(__file__).parent / "goal_sentences_heldout6.json").read_text())
+HELDOUT6_FLOOR = 0.84
 
 
 def as_goal(clauses: list[str]) -> list[str]:
@@ -119,6 +122,7 @@ def test_the_second_held_out_sentences_read_as_measured():
         (WRITERS, WRITERS_FLOOR, 360),
         (HELDOUT4, HELDOUT4_FLOOR, 90),
         (HELDOUT5, HELDOUT5_FLOOR, 120),
+        (HELDOUT6, HELDOUT6_FLOOR, 120),
     ],
     ids=["heldout3", "writers", "heldout4", "heldout5"],
 )
@@ -136,6 +140,7 @@ COLD_SETS = {
     "writers": (WRITERS, WRITERS_FLOOR),
     "heldout4": (HELDOUT4, HELDOUT4_FLOOR),
     "heldout5": (HELDOUT5, HELDOUT5_FLOOR),
+    "heldout6": (HELDOUT6, HELDOUT6_FLOOR),
 }
 
 

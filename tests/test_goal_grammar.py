@@ -124,7 +124,7 @@ def test_the_second_held_out_sentences_read_as_measured():
         (HELDOUT5, HELDOUT5_FLOOR, 120),
         (HELDOUT6, HELDOUT6_FLOOR, 120),
     ],
-    ids=["heldout3", "writers", "heldout4", "heldout5"],
+    ids=["heldout3", "writers", "heldout4", "heldout5", "heldout6"],
 )
 def test_more_sentences_written_cold_read_as_measured(sentences, floor, at_least):
     assert len(sentences["read"]) + len(sentences["refuse"]) >= at_least

@@ -79,8 +79,9 @@ from lark import Lark
 from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken
 from lark.visitors import CollapseAmbiguities
 
-from afford.words import earley
+from afford.words import earley, typed
 from afford.words.earley import words
+from afford.words.instructions import INSTRUCTIONS
 from afford.words.nouns import NOUN_PHRASES
 from afford.words.parses import Build, Item
 
@@ -317,145 +318,8 @@ kept: _keeping nps "still"? _placed? complements  -> says_bare
 _keeping: "keeping" | "leaving" | "with"
 _holding: "holding" | "still" "holding" | "keeping" "hold" "of" | "gripping" | "carrying"
 
-// ------------------------------------------------------------------ instructions
-command: _polite* action _tail?                        -> do
-       | _polite* _keep nps "from" ving _tail?         -> keep_from
-       | _polite* _dont action _tail?                  -> dont
-       | _polite* action ","? "without" ing _tail?     -> without
-_polite: _courtesy ","?
-_courtesy: "is" "it" "possible" "to" | "can" "you" | "could" "you" | "would" "you" | "will" "you"
-         | "i" "want" "you" "to"
-         | "i" "need" "you" "to" | "i" "would" "like" "you" "to" | "robot" | "now" | "go" "ahead" "and"
-         | "try" "to" | "kindly" | "you" "should" | "you" "must" | "go" "and" | "first" | "finally" | "just"
-         | "ok" | "okay" | "hey" | "lastly" | "next" | "also" | "would" "you" "be" "so" "kind" "as" "to"
-         | "be" "so" "kind" "as" "to" | "would" "you" "kindly" | "could" "you" "kindly"
-         | "i" "would" "love" "you" "to"
-         | "do" "me" "a" "favour" "and" | "do" "me" "a" "favor" "and" | "hmm" | "um" | "well"
-_tail: "for" "me" | "thanks" | "thank" "you" | "now" | "," "thanks"
-     | "right" "now" | "if" "you" "can" | _too | "also" | "," _too
-_dont: "do" "not" | "never" | "be" "careful" "not" "to" | "take" "care" "not" "to"
-action: _put nps complements                  -> put
-      | _put _particle nps complements        -> put
-      | _putdown nps "down"                   -> put_down
-      | _putdown "down" nps                   -> put_down
-      | _make nps vstate                      -> put
-      | _turn nps angle? _direction?          -> turn
-      | _swap nps ("round" | "around" | "over")?  -> swap
-      | _swap nps "with" nps                  -> swap
-      | _swap "the" ("places" | "positions" | "spots") "of" nps -> swap
-      | _hide nps (_hide_at nps)?             -> rid
-      | _stand_verb nps complements           -> put_standing
-      | _stand_verb nps "up"                  -> stand_up
-      | _stand_verb "up" nps                  -> stand_up
-      | "pick" "up" nps                       -> take
-      | "pick" nps "up"                       -> take
-      | "pick" nps                            -> take
-      | "keep" nps "up"                       -> stand_up
-      | _take nps                             -> take
-      | _give "me" nps                        -> take
-      | _give nps "a" degrees? _a_turn        -> turn
-      | _perform "a" degrees? _a_turn "with" nps -> turn_with
-      | _clear "off"? nps                     -> clear
-      | _clear nps "off"                      -> clear
-      | _give nps "to" "me"                   -> take
-      | _tip "over" nps                       -> tip
-      | _tip nps "over"                       -> tip
-      | _topple nps                           -> tip
-      | _rid nps                              -> rid
-      | _rid nps _hide_at nps                 -> rid
-      | "throw" "away" nps                    -> rid
-      | _keep_holding nps                     -> hold
-      | _let_go nps                           -> release
-ing: _tip_ing "over" nps                      -> tip
-   | _tip_ing nps "over"                      -> tip
-   | _toppling_ing nps                        -> tip
-   | _push_ing nps _off table                 -> rid
-   | _push_ing nps _off nps                   -> ing_off
-   | "dropping" nps                           -> rid
-_toppling_ing: "toppling" | "tipping" | "upsetting" | "overturning" | "knocking" "over" | "knocking" "down"
-_direction: "clockwise" | "counterclockwise" | "anticlockwise" | "counter" "clockwise" | "anti" "clockwise"
-          | "to" "the" ("left" | "right")
-_a_turn: "turn" | "twist" | "spin" | "rotation"
-_perform: "make" | "do" | "perform" | "execute"
-_clear: "clear" | "empty" | "unload" | "free" "up"
-_putdown: "put" | "set" | "lay" | "place"
-_make: "make" | "let" | "have" | "get"
-_turn: "turn" | "rotate" | "spin" | "twist" | "swivel" | "pivot" | "reorient"
-_swap: "swap" | "switch" | "exchange" | "trade" | "interchange"
-_hide: "hide" | "conceal" | "tuck"
-_hide_at: _under | "behind"
-_put: "put" | "place" | "set" | "move" | "stack" | "lay" | "drop" | "bring" | "carry" | "slide" | "push"
-    | "balance" | "transfer" | "shift" | "relocate" | "return" | "deposit" | "park" | "plop" | "plonk"
-    | "raise" | "send" | "bump" | "tap" | "poke" | "hit" | "dump" | "perch" | "settle" | "let" | "center"
-    | "centre" | "arrange" | "line" | "stick" | "land" | "clear"
-    | "hold" | "chuck" | "straighten" | "align" | "square" | "shove" | "roll" | "throw" | "toss"
-    | "sweep" | "knock" | "turn" | "rotate" | "get" | "have" | "keep"
-    | "leave" | "make" | "lift" | "take" | "remove" | "kick" | "nudge" | "position" | "sit" | "rest"
-    | "pop" | "spin" | "swing" | "flick" | "tip" | "lower" | "pull" | "drag"
-_stand_verb: "stand"
-_keep_holding: "keep" "holding" | "keep" "hold" "of" | "keep" "a" "hold" "of" | "keep" "gripping"
-             | "keep" "carrying" | "continue" "holding" | "continue" "to" "hold" | "carry" "on" "holding"
-             | "hang" "on" "to" | "go" "on" "holding" | "stay" "holding"
-_let_go: "let" "go" "of" | "release" | "drop"
-_take: "grab" | "grasp" | "hold" | "take" | "lift" | "fetch" | "get" | "collect" | "grip" | "lift" "up"
-     | "hold" "on" "to" | "hold" "onto" | "seize" | "catch" | "snatch" | "take" "hold" "of"
-     | "grab" "hold" "of" | "hold" "up"
-     | "raise" "up" | "pick" "out"
-_give: "hand" | "give" | "bring" | "pass" | "fetch"
-_tip: "knock" | "tip" | "push" | "turn" | "flip" | "topple" | "tilt"
-_topple: "topple" | "upset" | "overturn" | "tilt" | "tip"
-_rid: "chuck" | "ditch" | "bin" | "remove" | "get" "rid" "of" | "dispose" "of" | "discard"
-    | "clear" "away" | "eliminate"
-_tip_ing: "knocking" | "tipping" | "pushing" | "turning"
-_push_ing: "knocking" | "pushing" | "throwing" | "sweeping" | "rolling" | "moving"
-
 """
-GRAMMAR = SENTENCES + NOUN_PHRASES
-
-# Courtesies that close a request, read past before parsing ("..., would you?", "thanks so
-# much", "that would be lovely"): in the grammar they cost a third of every parse's time.
-_MUCH = ("", "so much", "very much", "a lot", "in advance")
-_NICE = (
-    "lovely wonderful great nice perfect fantastic amazing helpful brilliant ideal good awesome appreciated"
-)
-CODAS = tuple(
-    tuple(c.split())
-    for c in (
-        *(f"thanks {m}" for m in _MUCH),
-        *(f"thank you {m}" for m in _MUCH),
-        *(f"that would be {n}" for n in _NICE.split()),
-        *(f"{m} you" for m in ("would", "could", "will", "can")),
-        "pretty please", "if you would", "if you could", "if you do not mind", "nothing else", "cheers",
-        "instead", "if that is not too much trouble", "if it is not too much trouble",
-    )
-)  # fmt: skip
-
-
-_PAST = frozenset({"please", *(w for coda in CODAS for w in coda)})
-
-
-def _closed(said: list[str]) -> list[str]:
-    """The words without the courtesies that close them (`CODAS`), however many, and without
-    "please" wherever it stands: it asks for nothing ("the block across please, and ...")."""
-    said = _unpleased(said)
-    for coda in sorted(CODAS, key=len, reverse=True):
-        n = len(coda)
-        if len(said) > n and tuple(said[-n:]) == coda:
-            return _closed(said[: -n - (said[-n - 1] == ",")])
-    return said
-
-
-def _unpleased(said: list[str]) -> list[str]:
-    out: list[str] = []
-    for i, w in enumerate(said):
-        if w == "pretty" and said[i + 1 : i + 2] == ["please"]:
-            continue
-        if w != "please":
-            out.append(w)
-        elif out and out[-1] == "," and (i + 1 == len(said) or said[i + 1] in (",", "and")):
-            out.pop()  # "X, please, and Y": one comma stays
-    return out
-
+GRAMMAR = SENTENCES + INSTRUCTIONS + NOUN_PHRASES
 
 MAX_PARSES = 64  # a sentence with more readings than this is refused as too tangled to read
 MAX_WORDS = 60  # and one longer than this, before its parses are counted (they grow fast)
@@ -484,85 +348,32 @@ def parser() -> Lark:
 
 def known_words() -> frozenset[str]:
     """Every word the grammar reads, and those read past (`CODAS`, "please")."""
-    return _built()[1] | _PAST
-
-
-def _minded(said: list[str], known: frozenset[str]) -> list[str]:
-    """A request read as "please ...": "would you mind rotating the block" as "please rotate the
-    block", the verb after "mind" in its base form where that is a word the grammar reads."""
-    for i in range(len(said) - 3):
-        if said[i] in ("would", "do", "will") and said[i + 1 : i + 3] == ["you", "mind"]:
-            verb = said[i + 3]
-            stem = verb[:-3] if verb.endswith("ing") else ""
-            bases = (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "")
-            base = next((b for b in bases if b in known), None)
-            if base is not None:
-                return [*said[:i], "please", base, *_minded(_and_based(said[i + 4 :], known), known)]
-    return said
-
-
-def _and_based(said: list[str], known: frozenset[str]) -> list[str]:
-    """After "would you mind VERBing", each "and VERBing" in its base form too."""
-    out = list(said)
-    for i in range(1, len(out)):
-        if out[i - 1] == "and" and out[i].endswith("ing"):
-            stem = out[i][:-3]
-            base = next(
-                (b for b in (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "") if b in known),
-                None,
-            )
-            out[i] = base or out[i]
-    return out
-
-
-_LETTERS = "abcdefghijklmnopqrstuvwxyz"
-
-
-def _one_slip(word: str) -> set[str]:
-    """Every string one slip of the keyboard from `word`: a letter dropped, added or changed,
-    or two neighbours swapped."""
-    cut = [(word[:i], word[i:]) for i in range(len(word) + 1)]
-    return {
-        *(a + b[1:] for a, b in cut if b),
-        *(a + b[1] + b[0] + b[2:] for a, b in cut if len(b) > 1),
-        *(a + c + b[1:] for a, b in cut if b for c in _LETTERS),
-        *(a + c + b for a, b in cut for c in _LETTERS),
-    }
-
-
-def spellings(word: str, known: frozenset[str]) -> list[str]:
-    """`word` as the grammar may know it: itself, or the known words a slip away (none guessed
-    for words of fewer than three letters)."""
-    if word in known or len(word) < 3 or not word.isalpha():
-        return [word]
-    return sorted(_one_slip(word) & known) or [word]
-
-
-MAX_RESPELLINGS = 4  # sentences tried with the misspelt words' candidates (each a parse)
+    return _built()[1] | typed.READ_PAST
 
 
 def read(text: str) -> list[tuple[Item, ...]]:
     """Every parse of `text`, as items in the order said; `Unread` if it has none. A misspelt
     word is read as the known word a slip away with which the sentence reads, where exactly one
     spelling of the sentence does."""
-    typed = words(text)
+    said_as = words(text)
     known = known_words()
-    respelt = [list(t) for t in itertools.islice(itertools.product(*(spellings(w, known) for w in typed)), 8)]
-    if respelt != [typed] and len(respelt) <= MAX_RESPELLINGS:
+    spelt = (typed.spellings(w, known) for w in said_as)
+    respelt = [list(t) for t in itertools.islice(itertools.product(*spelt), typed.MAX_RESPELLINGS + 1)]
+    if respelt != [said_as] and len(respelt) <= typed.MAX_RESPELLINGS:
         read_as = []
         for said in respelt:
             try:
-                read_as.append(_readings(_minded(said, known)))
+                read_as.append(_readings(typed.minded(said, known)))
             except Unread:
                 pass
         if len(read_as) == 1:
             return read_as[0]
     # what cannot be read is told in the words as typed, not as guessed
-    return _readings(_minded(typed, known))
+    return _readings(typed.minded(said_as, known))
 
 
 def _readings(said: list[str]) -> list[tuple[Item, ...]]:
-    said = _closed(said)
+    said = typed.closed(said)
     if not said:
         raise Unread("the goal sentence is empty", said, None)
     known = known_words()

@@ -28,18 +28,11 @@ ORDER_WORDS = {2: ("left", "right"), 3: ("left", "middle", "right")}
 PLURALS = {"cup": "cups", "ball": "balls", "support": "supports", "block": "blocks", None: "objects"}
 # What a relation says of its subject, for messages: "'the ball' cannot be upright".
 SAID = {
-    "on": "on something",
-    "on_end": "on an end of the block",
-    "gone": "gone",
-    "tipped": "tipped over",
-    "upright": "upright",
-    "held": "held",
-    "lies": "turned across or lengthwise",
-    "left_of": "left of something",
-    "right_of": "right of something",
-    "in_front_of": "in front of something",
-    "behind": "behind something",
-}
+    "on": "on something", "on_end": "on an end of the block", "gone": "gone", "tipped": "tipped over",
+    "upright": "upright", "held": "held", "lies": "turned across or lengthwise",
+    "left_of": "left of something", "right_of": "right of something",
+    "in_front_of": "in front of something", "behind": "behind something",
+}  # fmt: skip
 QUANTITIES = {"both": 2, "two": 2, "three": 3}
 KINDS = ("cup", "ball", "support", "block")
 # The relation whose kinds a pseudo-relation (`derived.py`) is said of.
@@ -427,16 +420,11 @@ def _settled(said: list[tuple[Clause, bool]], state: State) -> tuple[Clause, ...
         if Clause(c.fact, not c.negated) in kept:
             subject = _listed(state, [c.fact.subject])
             raise Unresolved(f"it says both that {subject} is {SAID[c.fact.relation]} and that it is not")
-    # on an end of the block is on the block: saying both is one goal ("the ball on the block's left end")
+    # on an end of the block is on the block: saying both is one goal ("the ball on its left end")
     ends = {c.fact.subject for c in kept if c.fact.relation == "on_end" and not c.negated}
-    block = [k for k in state.members if state.kind(k) == "block"]
-    return tuple(
-        c
-        for c in kept
-        if not (
-            c.fact.relation == "on" and not c.negated and c.fact.subject in ends and c.fact.other in block
-        )
-    )
+    blocks = {k for k in state.members if state.kind(k) == "block"}
+    on_block = {c for c in kept if c.fact.relation == "on" and not c.negated and c.fact.subject in ends}
+    return tuple(c for c in kept if c not in on_block or c.fact.other not in blocks)
 
 
 def understand(text: str, state: State) -> tuple[Clause, ...]:

@@ -48,6 +48,7 @@ RECIPES: dict[str, Recipe] = {
             "the EM*D prediction net (paper II.C), cpu preset with two outcomes forked in the latent",
             (
                 "data-cpu",
+                "data-part",
                 "data-effects",
                 "train-prediction",
                 "calibrate-prediction",

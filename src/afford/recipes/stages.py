@@ -171,7 +171,7 @@ STAGES: tuple[Stage, ...] = (
         "train-prediction",
         "train",
         "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
-        "--out runs/two-outcome",
+        "--out runs/scratch-clip",
         95,
         "4,200 batches; first run as --preset cpu --set hypotheses=2 --set hypotheses_by=effect --set "
         "fork=latent --set effect_fraction=0.5 --set grad_clip=1.0 (the same config), stopped once and "
@@ -180,7 +180,7 @@ STAGES: tuple[Stage, ...] = (
     _stage(
         "calibrate-prediction",
         "calibrate",
-        "afford eval prediction --run runs/two-outcome --data data/cpu --no-futures",
+        "afford eval prediction --run runs/scratch-clip --data data/part --no-futures",
         0.69,
         "the choice head's Platt scaling fitted on val, one for all action types and one per type, "
         f"in RUN/calibration.json; {_TIMED}",
@@ -188,7 +188,7 @@ STAGES: tuple[Stage, ...] = (
     _stage(
         "export-prediction",
         "export",
-        f"afford weights export prediction.safetensors --run runs/two-outcome --out {MADE}",
+        f"afford weights export prediction.safetensors --run runs/scratch-clip --out {MADE}",
         0.03,
         f"{_EXPORTED}; {_TIMED}",
     ),
@@ -256,7 +256,7 @@ STAGES: tuple[Stage, ...] = (
         "train-continuous-mixed",
         "train",
         "afford train prediction --data data/cont --more-data data/effects --preset cpu-two-outcome "
-        "--init runs/two-outcome/best.safetensors --set turn_fraction=0.5 --set effect_fraction=0.3 "
+        "--init runs/scratch-clip/best.safetensors --set turn_fraction=0.5 --set effect_fraction=0.3 "
         "--set lr=3e-4 --set warmup=50 --steps 1400 --out runs/cont",
         31,
         "the prediction net fine-tuned on continuous turns with the side effects joined; first run "

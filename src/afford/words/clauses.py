@@ -14,6 +14,15 @@ from afford.errors import UserError
 from afford.words.facts import Fact, State
 
 
+class Unread(Exception):
+    """A sentence the grammar cannot read: the reason, its words, and the index of the word
+    where it failed (None: at the end, or nowhere in particular)."""
+
+    def __init__(self, reason: str, words: list[str], at: int | None) -> None:
+        super().__init__(reason)
+        self.reason, self.words, self.at = reason, words, at
+
+
 class SentenceError(UserError):
     """A sentence that cannot be read: one line naming the word or part that failed and, where
     one is found, a reading that can."""

@@ -34,7 +34,7 @@ _CONTRACTIONS = (
 )
 
 
-# Chat spellings, spelt out as contractions are (a slip of the keys is `grammar.spelt`'s).
+# Chat spellings, spelt out as contractions are (a slip of the keys is `typed.spellings`').
 _SPELT = {
     "u": "you",
     "pls": "please",

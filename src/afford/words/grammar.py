@@ -76,10 +76,11 @@ import functools
 import itertools
 
 from lark import Lark
-from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.exceptions import UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 from lark.visitors import CollapseAmbiguities
 
 from afford.words import earley, typed
+from afford.words.clauses import Unread
 from afford.words.earley import words
 from afford.words.instructions import INSTRUCTIONS
 from afford.words.nouns import NOUN_PHRASES
@@ -325,15 +326,6 @@ MAX_PARSES = 64  # a sentence with more readings than this is refused as too tan
 MAX_WORDS = 60  # and one longer than this, before its parses are counted (they grow fast)
 
 
-class Unread(Exception):
-    """A sentence the grammar cannot read: the reason, its words, and the index of the word
-    where it failed (None: at the end, or nowhere in particular)."""
-
-    def __init__(self, reason: str, words: list[str], at: int | None) -> None:
-        super().__init__(reason)
-        self.reason, self.words, self.at = reason, words, at
-
-
 # ---------------------------------------------------------------------------- the parser
 @functools.cache
 def _built() -> tuple[Lark, frozenset[str]]:
@@ -347,8 +339,9 @@ def parser() -> Lark:
 
 
 def known_words() -> frozenset[str]:
-    """Every word the grammar reads, and those read past (`CODAS`, "please")."""
-    return _built()[1] | typed.READ_PAST
+    """Every word the grammar reads, and "please" (read past wherever it stands); the words of
+    the closing courtesies (`typed.CODAS`) are read past only where they close a sentence."""
+    return _built()[1] | {"please"}
 
 
 def read(text: str) -> list[tuple[Item, ...]]:
@@ -396,8 +389,17 @@ def _readings(said: list[str]) -> list[tuple[Item, ...]]:
         raise Unread(f"it reads {len(trees)} ways", said, None)
     build = Build(joined)
     readings: list[tuple[Item, ...]] = []
+    refused = None
     for t in trees:
-        items = build.transform(t)
+        try:
+            items = build.transform(t)
+        except VisitError as e:  # a reading whose meaning refuses itself
+            if not isinstance(e.orig_exc, Unread):
+                raise
+            refused = e.orig_exc
+            continue
         if items not in readings:
             readings.append(items)
+    if not readings and refused is not None:
+        raise Unread(refused.reason, said, None)
     return readings

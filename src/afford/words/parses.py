@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from lark import v_args
 
-from afford.words.clauses import Item, Noun, Pred
+from afford.words.clauses import Item, Noun, Pred, Unread
 from afford.words.lexicon import TURNS
 from afford.words.nouns import NounPhrases, as_nouns, first_negated
 
@@ -68,12 +68,14 @@ class Build(NounPhrases):
 
     def purpose_first(self, meta, c):
         # "so that the cup ends up in front of the block, move it onto the table"
-        return (c[1], c[0])
+        return tuple(c)  # in the order said: the command's "it" names what the state named
 
     def vcomp(self, meta, c):
         return c[0]
 
     def unwanted(self, meta, c):  # "I don't want the ball on the support": its state denied
+        if c[0].preds is None or len(c[0].preds) != 1:  # "not X and Y" is not "not X, not Y"
+            raise Unread("'I do not want' denies one state at a time", [], None)
         return replace(c[0], preds=_negate(c[0].preds))
 
     def says_asked(self, meta, c):  # "can the cup go behind the ball?"

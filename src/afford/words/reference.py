@@ -210,14 +210,14 @@ def _holds_of(pred: Pred, k: int, state: State, context: _Context) -> bool:
 def _nearest(
     noun: Noun, fits: list[int], other: Noun, state: State, context: _Context, far: bool = False
 ) -> list[int]:
-    """The one of `fits` nearest `other` on the table (`far`: farthest from it), clearly nearer
-    (farther) than the next."""
+    """The one of `fits` nearest `other` on the table (`far`: farthest), clearly apart from the next."""
+    said = noun.words, own(noun)
     if other.quantity == "it":
-        raise Unresolved(f"{noun.words!r}: say what it is near by name", noun.words, own(noun))
+        raise Unresolved(f"{noun.words!r}: say by name what it is {'far from' if far else 'near'}", *said)
     (o, *more) = _counted(other, resolve(other, state, context), state)
     context.inner.append(o)
     if more:
-        raise Unresolved(f"{noun.words!r}: near one object, not {len(more) + 1}", noun.words, own(noun))
+        raise Unresolved(f"{noun.words!r}: near one object, not {len(more) + 1}", *said)
     ranked = sorted(
         (float(np.linalg.norm(state.poses[k, :2] - state.poses[o, :2])), k)
         for k in fits
@@ -226,7 +226,7 @@ def _nearest(
     ranked = ranked[::-1] if far else ranked
     if len(ranked) > 1 and abs(ranked[1][0] - ranked[0][0]) <= WORDS.beside:
         raise Unresolved(
-            f"{noun.words!r}: two objects are about as near; name it another way", noun.words, own(noun)
+            f"{noun.words!r}: two objects are about as {'far' if far else 'near'}; name it otherwise", *said
         )
     return [ranked[0][1]] if ranked else []
 

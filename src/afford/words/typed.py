@@ -24,9 +24,6 @@ CODAS = tuple(
 )  # fmt: skip
 
 
-READ_PAST = frozenset({"please", *(w for coda in CODAS for w in coda)})
-
-
 def closed(said: list[str]) -> list[str]:
     """The words without the courtesies that close them (`CODAS`), however many, and without
     "please" wherever it stands: it asks for nothing ("the block across please, and ...")."""
@@ -39,6 +36,7 @@ def closed(said: list[str]) -> list[str]:
 
 
 def _unpleased(said: list[str]) -> list[str]:
+    said = said[2:] if said[:2] == ["please", ","] else said  # "please, put ...": no comma opens it
     out: list[str] = []
     for i, w in enumerate(said):
         if w == "pretty" and said[i + 1 : i + 2] == ["please"]:

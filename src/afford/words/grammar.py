@@ -338,6 +338,7 @@ def parser() -> Lark:
     return _built()[0]
 
 
+@functools.cache
 def known_words() -> frozenset[str]:
     """Every word the grammar reads, and "please" (read past wherever it stands); the words of
     the closing courtesies (`typed.CODAS`) are read past only where they close a sentence."""

@@ -11,8 +11,8 @@ _MUCH = ("", "so much", "very much", "a lot", "in advance")
 _NICE = (
     "lovely wonderful great nice perfect fantastic amazing helpful brilliant ideal good awesome appreciated"
 )
-CODAS = tuple(
-    tuple(c.split())
+CODAS = sorted(  # the longest first, as `closed` tries them
+    (tuple(c.split())
     for c in (
         *(f"thanks {m}" for m in _MUCH),
         *(f"thank you {m}" for m in _MUCH),
@@ -20,7 +20,9 @@ CODAS = tuple(
         *(f"{m} you" for m in ("would", "could", "will", "can")),
         "pretty please", "if you would", "if you could", "if you do not mind", "nothing else", "cheers",
         "instead", "if that is not too much trouble", "if it is not too much trouble",
-    )
+    )),
+    key=len,
+    reverse=True,
 )  # fmt: skip
 
 
@@ -28,7 +30,7 @@ def closed(said: list[str]) -> list[str]:
     """The words without the courtesies that close them (`CODAS`), however many, and without
     "please" wherever it stands: it asks for nothing ("the block across please, and ...")."""
     said = _unpleased(said)
-    for coda in sorted(CODAS, key=len, reverse=True):
+    for coda in CODAS:
         n = len(coda)
         if len(said) > n and tuple(said[-n:]) == coda:
             return closed(said[: -n - (said[-n - 1] == ",")])
@@ -53,10 +55,7 @@ def minded(said: list[str], known: frozenset[str]) -> list[str]:
     block", the verb after "mind" in its base form where that is a word the grammar reads."""
     for i in range(len(said) - 3):
         if said[i] in ("would", "do", "will") and said[i + 1 : i + 3] == ["you", "mind"]:
-            verb = said[i + 3]
-            stem = verb[:-3] if verb.endswith("ing") else ""
-            bases = (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "")
-            base = next((b for b in bases if b in known), None)
+            base = _base(said[i + 3], known)
             if base is not None:
                 return [*said[:i], "please", base, *minded(_and_based(said[i + 4 :], known), known)]
     return said
@@ -64,16 +63,17 @@ def minded(said: list[str], known: frozenset[str]) -> list[str]:
 
 def _and_based(said: list[str], known: frozenset[str]) -> list[str]:
     """After "would you mind VERBing", each "and VERBing" in its base form too."""
-    out = list(said)
-    for i in range(1, len(out)):
-        if out[i - 1] == "and" and out[i].endswith("ing"):
-            stem = out[i][:-3]
-            base = next(
-                (b for b in (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "") if b in known),
-                None,
-            )
-            out[i] = base or out[i]
-    return out
+    return [(w if i == 0 or said[i - 1] != "and" else _base(w, known) or w) for i, w in enumerate(said)]
+
+
+def _base(verb: str, known: frozenset[str]) -> str | None:
+    """The base form of a VERBing ("rotating": "rotate", "putting": "put") that the grammar
+    reads, or None."""
+    if not verb.endswith("ing"):
+        return None
+    stem = verb[:-3]
+    bases = (stem, stem + "e", stem[:-1] if stem[-2:-1] == stem[-1:] else "")
+    return next((b for b in bases if b in known), None)
 
 
 _LETTERS = "abcdefghijklmnopqrstuvwxyz"

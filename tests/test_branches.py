@@ -3,18 +3,15 @@ and the expected eq. (5)."""
 
 from __future__ import annotations
 
-import copy
 from types import SimpleNamespace
 
 import numpy as np
-import pytest
 import torch
 
-from afford.planning.branches import Branches, BranchingModel, branch_moments, keep
+from afford.planning.branches import Branches, BranchingModel, keep
 from afford.planning.goal import Goal
 from afford.planning.learned import LearnedModel
 from afford.planning.tree import Node
-from afford.planning.uncertain import EnsembleBranchingModel, EnsembleError
 from afford.prediction.config import PRESETS as PRED
 from afford.prediction.model import PredictionNet
 from afford.recognition.config import PRESETS as REC
@@ -126,43 +123,3 @@ def test_with_risk_the_plan_the_net_is_sure_of_wins_at_equal_expected_loss():
     assert goal.best(averse.loss) == 0  # the sure one
     negative = Goal(goal.patch, negative=True)
     assert negative.best(BranchingModel.score(SimpleNamespace(risk=1.0), negative, [sure, coin]).loss) == 0
-
-
-def _ensemble(scene, members, risk=1.0):
-    recognizer = Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"])
-    scene.reset(SPECS)
-    return EnsembleBranchingModel(scene.observe(), recognizer, tuple(members), risk)
-
-
-def test_an_ensemble_of_agreeing_members_scores_as_one_branching_net(scene):
-    torch.manual_seed(0)
-    net = PredictionNet(FORKED).eval()
-    scene.reset(SPECS)
-    one = BranchingModel(scene.observe(), Recognizer(RecognitionNet(REC["tiny"]), REC["tiny"]), net, risk=1.0)
-    both = _ensemble(scene, [net, copy.deepcopy(net)])
-    goal = Goal(np.full((8, 8, 4), 0.5))
-    scores = []
-    for model in (one, both):
-        image, state = model.root()
-        ((child, state),) = model.predict([Node((), image, state)], [TURN])
-        ((child, state),) = model.predict([Node((TURN,), child, state)], [GRASP])
-        node = Node((TURN, GRASP), child, state)
-        scores.append(model.score(goal, [node]))
-    assert np.allclose(scores[0].loss, scores[1].loss) and np.allclose(scores[0].spread, scores[1].spread)
-    assert len(both.models) == 2 and both.p_steps == 2 * one.p_steps
-
-
-def test_an_ensemble_of_branches_adds_the_members_parting_to_their_mixtures_spread(scene):
-    torch.manual_seed(1)
-    members = [PredictionNet(FORKED).eval(), PredictionNet(FORKED).eval()]
-    model = _ensemble(scene, members, risk=1.0)
-    image, state = model.root()
-    ((child, state),) = model.predict([Node((), image, state)], [TURN])
-    assert np.allclose(child, np.mean([s.images[0] for s in state], axis=0))  # recognised on: the mean
-    goal = Goal(np.full((8, 8, 4), 0.5))
-    scores = model.score(goal, [Node((TURN,), child, state)])
-    means, within = zip(*[branch_moments(goal, [s]) for s in state], strict=True)
-    expected = np.mean(means) + np.sqrt(np.var(means) + np.mean(within))
-    assert np.isclose(scores.loss[0], expected) and scores.spread[0] > np.sqrt(np.mean(within))
-    with pytest.raises(EnsembleError):
-        _ensemble(scene, [PredictionNet(PRED["tiny"])])  # one member, one outcome: no spread to take

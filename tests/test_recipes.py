@@ -188,9 +188,9 @@ def test_the_training_docs_show_every_stage_with_its_time():
 
 # ------------------------------------------------------------------ afford weights info / export
 def test_weights_info_prints_a_shipped_files_recipe(capsys):
-    assert main(["weights", "info", "ensemble/prediction-2.safetensors"]) == 0
+    assert main(["weights", "info", "continuous/prediction.safetensors"]) == 0
     text = capsys.readouterr().out
-    assert "d00e9c4" in text and "--set place_effect_fraction=0.2" in text and "93 min" in text
+    assert "4aab0f6" in text and "--set turn_fraction=0.7" in text and "[31 min]" in text
     assert main(["weights", "info", str(WEIGHTS / "prediction.safetensors"), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert info["kind"] == "prediction" and info["recipe"] == recipe_record(RECIPES["prediction.safetensors"])
@@ -221,28 +221,30 @@ def test_weights_export_writes_a_run_as_a_file_of_the_layout_with_its_recipe_onl
     from afford.prediction.model import PredictionNet
     from afford.training.checkpoint import save_checkpoint
 
-    monkeypatch.chdir(tmp_path)  # the recipe's run, runs/place, is relative to where make runs
+    monkeypatch.chdir(tmp_path)  # the recipe's run, runs/turns, is relative to where make runs
     config = with_fields(PRESETS["tiny"], hypotheses=2, hypotheses_by="effect", fork="latent")
-    for run in ("runs/place", "mine"):
+    for run in ("runs/turns", "mine"):
         save_checkpoint(
             Path(run) / "best.safetensors", PredictionNet(config), "prediction", asdict(config), 1
         )
         (Path(run) / "calibration.json").write_text(json.dumps({"choice_scale": 0.5, "choice_bias": -1.0}))
-    member = ["weights", "export", "ensemble/prediction-2.safetensors"]
-    assert main([*member, "--run", "runs/place", "--out", "w"]) == 0
-    out = tmp_path / "w" / "ensemble" / "prediction-2.safetensors"
-    assert read_recipe(read_metadata(out)) == recipe_record(RECIPES["ensemble/prediction-2.safetensors"])
+    nested = ["weights", "export", "continuous/prediction.safetensors"]
+    assert main([*nested, "--run", "runs/turns", "--out", "w"]) == 0
+    out = tmp_path / "w" / "continuous" / "prediction.safetensors"
+    assert read_recipe(read_metadata(out)) == recipe_record(RECIPES["continuous/prediction.safetensors"])
     _, loaded = load_net(out)
     assert (loaded.outcomes.choice_scale, loaded.outcomes.choice_bias) == (0.5, -1.0)
     # another run: the same file, and no shipped recipe claimed for it
-    assert main([*member, "--run", "mine", "--out", "other"]) == 0
-    assert read_recipe(read_metadata(tmp_path / "other" / "ensemble" / "prediction-2.safetensors")) is None
-    assert (
-        main(["weights", "export", "ensemble/prediction-7.safetensors", "--run", "mine", "--out", "w"]) == 0
-    )
+    assert main([*nested, "--run", "mine", "--out", "other"]) == 0
+    assert read_recipe(read_metadata(tmp_path / "other" / "continuous" / "prediction.safetensors")) is None
     capsys.readouterr()
-    assert main(["weights", "export", "nope.safetensors", "--run", "mine", "--out", "x"]) == 2
-    assert "not a file of the weights layout" in capsys.readouterr().err
+    for unknown in (
+        "nope.safetensors",
+        "continuous/prediction-7.safetensors",
+        "ensemble/prediction-2.safetensors",
+    ):
+        assert main(["weights", "export", unknown, "--run", "mine", "--out", "x"]) == 2
+        assert "not a file of the weights layout" in capsys.readouterr().err
     assert main(["weights", "export", "recognition.safetensors", "--run", "mine", "--out", "x"]) == 2
     assert "holds a recognition net" in capsys.readouterr().err
 

@@ -1,4 +1,4 @@
-"""The premises of the side-effect risk tasks in tasks/uncertain/ (04, 05): the plan the goal
+"""The premises of the risk tasks in tasks/uncertain/ (01, 04, 05): the plan the goal
 image asks for holds unperturbed, and a few millimetres off it the side effect follows."""
 
 from afford.planning.tasks import load_task
@@ -11,6 +11,25 @@ def _shifted(specs, kinds, dx: float, dy: float = 0.0):
         ObjectSpec(s.kind, (s.pos[0] + dx, s.pos[1] + dy, s.pos[2]), s.quat) if s.kind in kinds else s
         for s in specs
     ]
+
+
+def test_the_tipping_edge_task_holds_unperturbed_and_tips_when_the_pile_shifts(scene):
+    """The premise of tasks/uncertain/01: the cup placed at the block's right end stays up as
+    planned, but lands too far out when the pile stands 6 mm left of where the plan aimed: the
+    block tips under it and throws it off (the task's success check fails)."""
+    task = load_task("tasks/uncertain/01-cup-near-a-tipping-edge.json", scene)
+    scene.reset(task.scene)
+    grasp = next(a for a in scene.affordances() if a.type == "grasp")
+    scene.execute(grasp)
+    end = next(a for a in scene.affordances() if a.type == "place" and a.position[0] > 0.08)
+    shifted = [
+        s if s.kind == "cup" else ObjectSpec(s.kind, (s.pos[0] - 0.006, *s.pos[1:]), s.quat)
+        for s in task.scene
+    ]
+    for start, holds in ((task.scene, True), (shifted, False)):
+        scene.reset(start)
+        assert scene.execute(grasp).executed and scene.execute(end).executed
+        assert (rests_on(scene, "cup0", "block0") and rests_on(scene, "block0", "support0")) == holds
 
 
 def test_the_ball_aboard_rolls_off_when_the_cup_tips_the_block(scene):

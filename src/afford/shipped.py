@@ -1,12 +1,12 @@
 """The nets a planner or an evaluation uses: one bundle, from one weights folder.
 
 A weights folder holds the nets in the package's own layout (`afford weights export` writes
-each file there): recognition.safetensors, prediction.safetensors and the ensemble's members in
-ensemble/, agreement.safetensors (goals in words), and the object world model's
-objects/perception.safetensors and objects/dynamics.safetensors. A folder of training runs
-(recognition/ and prediction/, each with best.safetensors) serves for the first two. `Nets`
-loads each net on first use, so a planner loads only what it needs and a closed loop, which
-builds its world model every round, loads nothing twice. A net the folder lacks is a one-line
+each file there): recognition.safetensors, prediction.safetensors, agreement.safetensors (goals
+in words), and the object world model's objects/perception.safetensors and
+objects/dynamics.safetensors. A folder of training runs (recognition/ and prediction/, each
+with best.safetensors) serves for the first two. `Nets` loads each net on first use, so a
+planner loads only what it needs and a closed loop, which builds its world model every round,
+loads nothing twice. A net the folder lacks is a one-line
 error naming the file when it is first needed, never a net taken from elsewhere.
 """
 
@@ -22,7 +22,6 @@ WEIGHTS = Path(__file__).resolve().parent / "weights"  # shipped with the packag
 RECOGNITION_FILE = "recognition.safetensors"
 PREDICTION_FILE = "prediction.safetensors"
 AGREEMENT_FILE = "agreement.safetensors"  # goals in words (words/)
-MEMBERS_DIR = "ensemble"  # the ensemble planner's prediction nets beside the folder's own
 OBJECTS_DIR = "objects"  # the object world model's nets (afford.objects)
 PERCEPTION_FILE = "perception.safetensors"  # in OBJECTS_DIR: E over objects
 DYNAMICS_FILE = "dynamics.safetensors"  # in OBJECTS_DIR: P^a over objects
@@ -33,7 +32,7 @@ OBJECTS = WEIGHTS / OBJECTS_DIR
 CONTINUOUS_PREDICTION = WEIGHTS / "continuous" / PREDICTION_FILE
 
 # The nets of a bundle, by the attribute that holds each (`Planner.needs` names them so).
-KINDS = ("recognizer", "predictor", "members", "perception", "dynamics", "agreement")
+KINDS = ("recognizer", "predictor", "perception", "dynamics", "agreement")
 
 
 def kind_of(file: str) -> str | None:
@@ -47,8 +46,6 @@ def kind_of(file: str) -> str | None:
         return Path(parts[1]).stem
     if parts[-1] == PREDICTION_FILE and len(parts) <= 2 and parts[0] != OBJECTS_DIR:
         return "prediction"  # the folder's own, or one shipped apart (continuous/)
-    if len(parts) == 2 and parts[0] == MEMBERS_DIR and parts[1].endswith(".safetensors"):
-        return "prediction"  # an ensemble member
     return None
 
 
@@ -81,8 +78,6 @@ class Nets:
         self.folder = Path(folder) if folder is not None else WEIGHTS
         self.prediction_file = Path(prediction) if prediction is not None else None
         self.__dict__.update(given)  # a given net stands where its cached_property would load one
-        if "predictor" in given and "members" not in given:
-            self.members = (given["predictor"],)
 
     def __repr__(self) -> str:
         return f"Nets({str(self.folder)!r})"
@@ -120,18 +115,6 @@ class Nets:
         if not path.is_file():
             raise NetsError(f"{path}: no such prediction net")
         return load_net(path)[0]
-
-    @cached_property
-    def members(self) -> tuple:
-        """The ensemble planner's prediction nets: the folder's own first, then its ensemble/
-        (a prediction net given apart has none beside it)."""
-        from afford.prediction.ensemble import check_members
-        from afford.prediction.evaluate import load_net
-
-        others = [] if self.prediction_file else sorted((self.folder / MEMBERS_DIR).glob("*.safetensors"))
-        members = [self.predictor, *(load_net(p)[0] for p in others)]
-        check_members(members)
-        return tuple(members)
 
     @cached_property
     def perception(self):

@@ -17,7 +17,7 @@ def add_weights_argument(parser, detail: bool = False) -> None:
         "--run-dir",
         metavar="DIR",
         help="a weights folder in the package's layout (recognition.safetensors, prediction.safetensors, "
-        "ensemble/, agreement.safetensors, objects/perception.safetensors and objects/dynamics.safetensors, "
+        "agreement.safetensors, objects/perception.safetensors and objects/dynamics.safetensors, "
         "as `afford weights export` writes them), or with recognition/ and prediction/ training runs; "
         "the planners load the nets they need from it (default: the weights shipped in the package)"
         if detail
@@ -154,19 +154,19 @@ def add_search_arguments(parser, max_nodes: bool = True) -> None:
         type=float,
         default=PlannerConfig.risk,
         metavar="W",
-        help="ensemble planner, and learned, hybrid and objects planners with --outcomes expected: a plan "
-        "scores its expected goal loss (eq. 5; over the members, or over the net's branches) plus W "
-        "standard deviations of it: risk-averse "
+        help="learned, hybrid and objects planners with --outcomes expected: a plan scores its expected "
+        "goal loss (eq. 5, over the branches of its foreseen outcomes) plus W standard deviations of it: "
+        "risk-averse "
         f"(default {PlannerConfig.risk}); 0: the expected loss alone",
     )
     parser.add_argument(
         "--outcomes",
         choices=("likeliest", "expected"),
         default=PlannerConfig.outcomes,
-        help="learned, hybrid and ensemble planners, with prediction nets that foresee two outcomes per "
-        "step (a canonical one and a side effect): likeliest, each step carries on the one its head finds "
-        "likelier (default); expected, both are kept as branches (per member, for the ensemble) and a plan "
-        "scores its expected goal loss (eq. 5) over them; objects and hybrid-objects planners: the K "
+        help="learned and hybrid planners, with a prediction net that foresees two outcomes per step (a "
+        "canonical one and a side effect): likeliest, each step carries on the one its head finds "
+        "likelier (default); expected, both are kept as branches and a plan scores its expected goal "
+        "loss (eq. 5) over them; objects and hybrid-objects planners: the K "
         "outcomes of its dynamics "
         "the same way, with their calibrated probabilities",
     )

@@ -274,14 +274,12 @@ def add_parsers(sub) -> None:
         "breadth-first), learned (the paper's method: the same search with the trained recognition and "
         "prediction nets), hybrid (paper V: the symbolic planner's canonical plans, each checked by the "
         "learned nets against the goal; the search when all are rejected), hybrid-oracle (the same, "
-        "checked by the simulator), ensemble (paper V: the learned search on an ensemble of prediction "
-        "nets, each plan scored by its members' mean goal loss plus --risk standard deviations), "
-        "perceived-sim (the simulator run on the objects perception sees), objects (the object world model: "
-        "objects perceived, moved by learned dynamics and drawn), hybrid-objects (canonical plans checked by "
-        "the object world model), objects-true (the object world model started from the simulator's true "
-        "objects: beside objects, what perception costs). Writes a "
-        "picture like the paper's Fig. 8 and a JSON record. Exit status 1 when the executed plan misses "
-        "the goal.",
+        "checked by the simulator), perceived-sim (the simulator run on the objects perception sees), "
+        "objects (the object world model: objects perceived, moved by learned dynamics and drawn), "
+        "hybrid-objects (canonical plans checked by the object world model), objects-true (the object "
+        "world model started from the simulator's true objects: beside objects, what perception costs). "
+        "Writes a picture like the paper's Fig. 8 and a JSON record. Exit status 1 when the executed plan "
+        "misses the goal.",
     )
     given = pl.add_mutually_exclusive_group(required=True)
     given.add_argument("--task", metavar="TASK.json")

@@ -160,7 +160,7 @@ def cmd_export(args) -> int:
     if wanted is None:
         raise CLIError(
             f"{args.file}: not a file of the weights layout (recognition.safetensors, "
-            "prediction.safetensors, ensemble/NAME.safetensors, agreement.safetensors, "
+            "prediction.safetensors, continuous/prediction.safetensors, agreement.safetensors, "
             "objects/perception.safetensors, objects/dynamics.safetensors)"
         )
     run = Path(args.run)
@@ -192,7 +192,7 @@ def add_parsers(sub) -> None:
         "info",
         help="print a weights file's recipe",
         description="Print the recipe of a weights file (a path, or a name in the shipped folder such as "
-        "ensemble/prediction-1.safetensors), or of every shipped file when FILE is omitted.",
+        "continuous/prediction.safetensors), or of every shipped file when FILE is omitted.",
     )
     i.add_argument("file", nargs="?", metavar="FILE")
     i.add_argument("--json", action="store_true", help="the records as JSON (one, or a list without FILE)")
@@ -221,9 +221,9 @@ def add_parsers(sub) -> None:
     x.add_argument(
         "file",
         metavar="FILE",
-        help="the file in DIR: recognition.safetensors, prediction.safetensors, ensemble/NAME.safetensors "
-        "(an ensemble member), agreement.safetensors, objects/perception.safetensors or "
-        "objects/dynamics.safetensors",
+        help="the file in DIR: recognition.safetensors, prediction.safetensors, "
+        "continuous/prediction.safetensors (the continuous-turn net), agreement.safetensors, "
+        "objects/perception.safetensors or objects/dynamics.safetensors",
     )
     x.add_argument("--run", required=True, metavar="RUN")
     x.add_argument("--checkpoint", default=BEST, help=f"file in RUN (default {BEST})")

@@ -6,10 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from afford.planning.branches import RISK
 from afford.planning.closed_loop import Loop
 from afford.planning.hybrid import ACCEPT
 from afford.planning.tree import SearchConfig, SearchResult
-from afford.planning.uncertain import RISK
 from afford.sim.affordances import Affordance
 
 
@@ -24,9 +24,9 @@ class PlannerConfig:
     # The learned planner: optimise the turn angles of the best plan with turns by gradient
     # descent through the prediction net (planning/angles.py) and keep it when it is closer.
     optimise_turns: bool = False
-    # The ensemble planner (planning/uncertain.py), and the learned planners with outcomes
-    # "expected" (planning/branches.py): a plan scores eq. (5) averaged over the members (or the
-    # net's branches) plus this many standard deviations of it (risk-averse); 0: the mean alone.
+    # The learned and object planners with outcomes "expected" (planning/branches.py): a plan
+    # scores eq. (5) averaged over the branches of the outcomes foreseen, plus this many
+    # standard deviations of it (risk-averse); 0: the mean alone.
     risk: float = RISK
     # Plan, execute the first action, look at the real state, plan again with the steps left
     # (planning/closed_loop.py); False: the paper's open loop, the whole plan executed blind.
@@ -57,7 +57,6 @@ class Outcome:
     total: int = 0
     truncated: bool = False  # the search's time limit stopped the tree early
     source: str = ""  # hybrid only: "symbolic" (a checked canonical plan) or "fallback" (the search)
-    spread: float | None = None  # ensemble only: the members' spread of eq. (5) at the plan's end
     # `execute_perturbed`: the plan's success in each execution from a perturbed start.
     perturbed: list[bool] = field(default_factory=list)
     loop: Loop | None = None  # closed loop only: each round's plan, prediction and observation
@@ -86,7 +85,6 @@ class Outcome:
             }
             | ({"truncated": True} if self.truncated else {})
             | ({"source": self.source} if self.source else {})
-            | ({"spread": round(self.spread, 6)} if self.spread is not None else {})
             | (
                 {
                     "closed_loop": {

@@ -19,7 +19,6 @@ from afford.planning.judge import execute_plan
 from afford.planning.oracle import OracleModel
 from afford.planning.outcome import Outcome, PlannerConfig
 from afford.planning.searches import (
-    ensemble_search,
     learned_model,
     learned_search,
     objects_model,
@@ -268,14 +267,6 @@ def _hybrid(name: str, base: Planner, about: str) -> Planner:
     return Planner(solve_it, about, base.needs, _hybrid_rounds(base.world_model))
 
 
-def _ensemble(task: Task, scene: Scene, config: PlannerConfig, nets: Nets) -> Outcome:
-    scene.reset(task.scene)
-    result = ensemble_search(task, scene, config, nets, task.max_steps)
-    outcome = _judge(task, "ensemble", result, scene)
-    outcome.spread = result.nodes[result.best].spread
-    return outcome
-
-
 _LEARNED = _searching(
     "learned",
     learned_search,
@@ -306,12 +297,6 @@ PLANNER_REGISTRY: dict[str, Planner] = {
     "learned": _LEARNED,
     "hybrid": _hybrid("hybrid", _LEARNED, "canonical proposals checked by the learned nets (paper V)"),
     "hybrid-oracle": _hybrid("hybrid-oracle", _ORACLE, "canonical proposals checked by the simulator"),
-    "ensemble": Planner(
-        _ensemble,
-        "the learned planner on an ensemble of prediction nets, risk-averse (paper V)",
-        ("recognizer", "members"),
-        _searcher(ensemble_search),
-    ),
     "perceived-sim": _searching(
         "perceived-sim",
         perceived_sim_search,

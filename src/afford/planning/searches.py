@@ -17,7 +17,6 @@ from afford.planning.outcome import PlannerConfig
 from afford.planning.strategies import search
 from afford.planning.tasks import Task
 from afford.planning.tree import SearchResult
-from afford.planning.uncertain import EnsembleBranchingModel, EnsembleModel
 from afford.shipped import Nets
 from afford.sim.scene import Scene
 
@@ -52,15 +51,6 @@ def learned_search(task: Task, scene: Scene, config: PlannerConfig, nets: Nets, 
 
         result = with_optimised_turns(result, model, task.goal)
     return result
-
-
-def ensemble_search(task: Task, scene: Scene, config: PlannerConfig, nets: Nets, steps: int) -> SearchResult:
-    """The ensemble's search: each member carries on its likeliest outcome, or keeps every
-    outcome as a branch."""
-    check_outcomes(config)
-    kind = EnsembleBranchingModel if config.outcomes == "expected" else EnsembleModel
-    model = kind(scene.observe(), nets.recognizer, nets.members, config.risk)
-    return search(model, task.goal, steps, config.search)
 
 
 def oracle_search(task: Task, scene: Scene, config: PlannerConfig, nets: Nets, steps: int) -> SearchResult:

@@ -44,9 +44,6 @@ class Node:
     state: Any
     parent: int = -1
     loss: float = float("nan")
-    # An ensemble's world model (planning/uncertain.py): the spread of eq. (5) over its
-    # members, which `loss` then counts by the planner's risk weight. 0 for one model.
-    spread: float = 0.0
     # What recognition found on this state (None: not expanded), for reports of the tree.
     recognised: list[Detection] | None = None
 
@@ -60,8 +57,9 @@ Recognised = list[Detection]  # the affordances on one state, each with its conf
 
 @dataclass
 class Scores:
-    """Each node's plan score (eq. 5 against the goal, or a model's own), and for an ensemble
-    the spread of it over the members (None: one model, no spread)."""
+    """Each node's plan score (eq. 5 against the goal, or a model's own), and for a model that
+    keeps several outcomes per state (planning/branches.py) the standard deviation of eq. (5)
+    over them, which the score counts by the planner's risk weight (None: one outcome)."""
 
     loss: np.ndarray
     spread: np.ndarray | None = None
@@ -70,7 +68,7 @@ class Scores:
 class WorldModel(Protocol):
     """What the search needs of a model of the world. A model subclasses this and gives `root`,
     `recognise` and `predict`; `score` is eq. (5) on each node's image unless the model has its
-    own (an ensemble scores the spread of its members' outcomes too)."""
+    own (a model that keeps several outcomes scores their spread too)."""
 
     def root(self) -> tuple[np.ndarray, Any]:
         """The current state: its image and the model's state for it."""
@@ -189,7 +187,6 @@ class Growth:
         scores = self.model.score(self.goal, nodes)
         for k, n in enumerate(nodes):
             n.loss = float(scores.loss[k])
-            n.spread = 0.0 if scores.spread is None else float(scores.spread[k])
 
     def room(self) -> int:
         """States the budget still allows (the root is not counted)."""

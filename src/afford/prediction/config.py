@@ -130,10 +130,10 @@ class SamplingConfig:
     angle_flip: bool = True
     position_noise: float = 0.002
     angle_noise: float = 1.0
-    # The run's random stream (data order, augmentation): members of an ensemble differ by it.
+    # The run's random stream (data order, augmentation): nets trained apart differ by it.
     seed: int = 0
-    # Train on a resample, with replacement, of the training sequences drawn from `seed`: the
-    # bootstrap that makes an ensemble's members disagree where the data is thin.
+    # Train on a resample, with replacement, of the training sequences drawn from `seed`: a
+    # bootstrap, so that nets trained apart disagree where the data is thin.
     bootstrap: bool = False
     # The share of training runs drawn from sequences with a turn (0: as the data comes, about
     # a quarter with turns): more turn examples for P^turn, for continuous turn angles (paper V).

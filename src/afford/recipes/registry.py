@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Recipe:
-    file: str  # relative to the weights folder, e.g. "ensemble/prediction-1.safetensors"
+    file: str  # relative to the weights folder, e.g. "continuous/prediction.safetensors"
     net: str  # what the file holds, in a line
     stages: tuple[str, ...]  # names in STAGES, in the order they run
     trained: str  # the training stage whose run the file is exported from
@@ -56,40 +56,6 @@ RECIPES: dict[str, Recipe] = {
             ),
             trained="train-prediction",
             commit="4fba93f",
-            unknown=(_BUILDS,),
-        ),
-        Recipe(
-            "ensemble/prediction-1.safetensors",
-            "the ensemble's member 1: the prediction net's recipe on seed 1 and a bootstrap, then "
-            "fine-tuned with blocks balanced near tipping",
-            (
-                "data-cpu",
-                "data-part",
-                "data-effects",
-                "data-balances",
-                "train-member-1",
-                "train-member-1-balances",
-                "calibrate-member-1",
-                "export-member-1",
-            ),
-            trained="train-member-1-balances",
-            commit="aab50f8",
-            unknown=(_BUILDS,),
-        ),
-        Recipe(
-            "ensemble/prediction-2.safetensors",
-            "the ensemble's member 2: the prediction net's recipe on seed 2 and a bootstrap, place "
-            "side effects drawn more often",
-            (
-                "data-cpu",
-                "data-part",
-                "data-effects",
-                "train-member-2",
-                "calibrate-member-2",
-                "export-member-2",
-            ),
-            trained="train-member-2",
-            commit="d00e9c4",
             unknown=(_BUILDS,),
         ),
         Recipe(

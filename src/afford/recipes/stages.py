@@ -79,13 +79,6 @@ STAGES: tuple[Stage, ...] = (
         "made with; 8.5 min on the machine that first made it",
     ),
     _stage(
-        "data-balances",
-        "data",
-        "afford generate --out data/balances --sequences 1500 --seed 21 --layout balances",
-        3.7,
-        "blocks balanced near tipping: 4,555 executions",
-    ),
-    _stage(
         "data-cont",
         "data",
         "afford generate --out data/cont --sequences 6000 --seed 2 --turn-angles continuous --workers 2",
@@ -191,66 +184,6 @@ STAGES: tuple[Stage, ...] = (
         f"afford weights export prediction.safetensors --run runs/scratch-clip --out {MADE}",
         0.03,
         f"{_EXPORTED}; {_TIMED}",
-    ),
-    _stage(
-        "train-member-1",
-        "train",
-        "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
-        "--set seed=1 --set bootstrap=true --out runs/member1",
-        94,
-        "the shipped net's recipe on its own seed and bootstrap resample; first run with --preset cpu "
-        "and the same --set fields as the prediction net",
-    ),
-    _stage(
-        "train-member-1-balances",
-        "train",
-        "afford train prediction --data data/part --more-data data/effects --more-data data/balances "
-        "--preset cpu-two-outcome --init runs/member1/best.safetensors --set seed=1 --set bootstrap=true "
-        "--set lr=3e-4 --set warmup=50 --steps 1000 --out runs/m1bal",
-        30.4,
-        "first started from the member as shipped then (runs/member1 exported in float16 with its "
-        "head calibrated: git show 4669474:src/afford/weights/ensemble/prediction-1.safetensors), "
-        "not from runs/member1's float32 checkpoint",
-    ),
-    _stage(
-        "calibrate-member-1",
-        "calibrate",
-        "afford eval prediction --run runs/m1bal --data data/part --no-futures",
-        0.67,
-        _TIMED,
-    ),
-    _stage(
-        "export-member-1",
-        "export",
-        f"afford weights export ensemble/prediction-1.safetensors --run runs/m1bal --out {MADE}",
-        0.03,
-        "first written by `afford export --member` (the same float16 weights and calibrated config); "
-        + _TIMED,
-    ),
-    _stage(
-        "train-member-2",
-        "train",
-        "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
-        "--set effect_fraction=0.3 --set place_effect_fraction=0.2 --set seed=2 --set bootstrap=true "
-        "--out runs/place",
-        93,
-        "place runs with a side effect drawn more often; first run with --preset cpu and the "
-        "prediction net's --set fields",
-    ),
-    _stage(
-        "calibrate-member-2",
-        "calibrate",
-        "afford eval prediction --run runs/place --data data/part --no-futures",
-        0.63,
-        _TIMED,
-    ),
-    _stage(
-        "export-member-2",
-        "export",
-        f"afford weights export ensemble/prediction-2.safetensors --run runs/place --out {MADE}",
-        0.03,
-        "first written by `afford export --member` (the same float16 weights and calibrated config); "
-        + _TIMED,
     ),
     _stage(
         "train-continuous-mixed",

@@ -80,8 +80,6 @@ def plan_strip(outcome, goal, path: str | Path) -> None:
             text = f"{'start' if i == 0 else f'planned {i}'}: {a.type}" + (f" {a.turn:+g}" if a.turn else "")
         else:
             text = "start (no plan)" if i == 0 and not plan else f"planned {i}"
-            if outcome.spread is not None and plan:
-                text += f" (members' spread {outcome.spread:.4f})"
         panels.append(label(pil, text))
     verdict = "solved" if outcome.success else "FAILED"
     if outcome.perturbed:

@@ -19,6 +19,7 @@ class Recipe:
 
 
 FOOT_COMMIT = "9f1c7cf"  # the commit that ships the recognition net of the footed world
+FOOT_PREDICTION_COMMIT = "0000000"  # the commit that ships the prediction net of the footed world
 _BUILDS = "the MuJoCo and torch builds the data and training first ran on (constraints.txt pins them now)"
 
 # One entry per shipped file, by its path under weights/.
@@ -48,15 +49,13 @@ RECIPES: dict[str, Recipe] = {
             "the EM*D prediction net (paper II.C), cpu preset with two outcomes forked in the latent",
             (
                 "data-cpu",
-                "data-part",
                 "data-effects",
                 "train-prediction",
                 "calibrate-prediction",
                 "export-prediction",
             ),
             trained="train-prediction",
-            commit="4fba93f",
-            unknown=(_BUILDS,),
+            commit=FOOT_PREDICTION_COMMIT,
         ),
         Recipe(
             "continuous/prediction.safetensors",

@@ -49,7 +49,6 @@ _PREDICT_FIRST = (
 )
 _TIMED = "timed with the shipped file as the run's best checkpoint (the same net, so the same work)"
 FOOT_MINUTES, CAL_MINUTES = 34, 0.37  # the footed recognition stages, as measured
-_EXPORTED = "first written by `afford export` (the same float16 weights and calibrated config)"
 
 # Every stage, in the order `afford weights make` runs them: each after the stages it reads.
 STAGES: tuple[Stage, ...] = (
@@ -58,7 +57,7 @@ STAGES: tuple[Stage, ...] = (
         "data",
         "afford generate --out data/cpu --sequences 10000 --seed 0 --workers 2",
         14,
-        "the default dataset: 34,744 executions, val and test 188 sequences each; 14 min as recorded "
+        "the default dataset: 34,888 executions, val and test 188 sequences each; 14 min as recorded "
         "when it was made again whole, 45 min or more on a machine making 10-13 executions a second",
     ),
     _stage(
@@ -74,9 +73,9 @@ STAGES: tuple[Stage, ...] = (
         "data-effects",
         "data",
         "afford generate --out data/effects --sequences 1500 --seed 11 --actions effects --workers 2",
-        19,
-        "side effects sought: 5,264 executions with MuJoCo 4.0.1, 5,265 with the build it was first "
-        "made with; 8.5 min on the machine that first made it",
+        15.5,
+        "side effects sought: 5,307 executions, 39% of them with a side effect; timed while sharing "
+        "the machine",
     ),
     _stage(
         "data-cont",
@@ -164,36 +163,36 @@ STAGES: tuple[Stage, ...] = (
         "train-prediction",
         "train",
         "afford train prediction --data data/cpu --more-data data/effects --preset cpu-two-outcome "
-        "--out runs/scratch-clip",
-        95,
-        "4,200 batches; first run as --preset cpu --set hypotheses=2 --set hypotheses_by=effect --set "
-        "fork=latent --set effect_fraction=0.5 --set grad_clip=1.0 (the same config), stopped once and "
-        "resumed from its batch-1,750 checkpoint",
+        "--out runs/two-outcome",
+        152,
+        "4,200 batches; its first 3,350 beside other work (about 27 a minute), stopped there and "
+        "resumed from its batch-3,250 checkpoint on an idle machine (about 36 a minute)",
     ),
     _stage(
         "calibrate-prediction",
         "calibrate",
-        "afford eval prediction --run runs/scratch-clip --data data/part --no-futures",
-        0.69,
+        "afford eval prediction --run runs/two-outcome --data data/cpu --no-futures",
+        0.95,
         "the choice head's Platt scaling fitted on val, one for all action types and one per type, "
-        f"in RUN/calibration.json; {_TIMED}",
+        "in RUN/calibration.json",
     ),
     _stage(
         "export-prediction",
         "export",
-        f"afford weights export prediction.safetensors --run runs/scratch-clip --out {MADE}",
+        f"afford weights export prediction.safetensors --run runs/two-outcome --out {MADE}",
         0.03,
-        f"{_EXPORTED}; {_TIMED}",
+        "float16 with the calibrated head",
     ),
     _stage(
         "train-continuous-mixed",
         "train",
         "afford train prediction --data data/cont --more-data data/effects --preset cpu-two-outcome "
-        "--init runs/scratch-clip/best.safetensors --set turn_fraction=0.5 --set effect_fraction=0.3 "
+        "--init runs/two-outcome/best.safetensors --set turn_fraction=0.5 --set effect_fraction=0.3 "
         "--set lr=3e-4 --set warmup=50 --steps 1400 --out runs/cont",
         31,
         "the prediction net fine-tuned on continuous turns with the side effects joined; first run "
-        "with --preset cpu and the prediction net's --set fields",
+        "with --preset cpu and the prediction net's --set fields, from the prediction net of the "
+        "world of posts alone (runs/scratch-clip, shipped at commit 4fba93f)",
     ),
     _stage(
         "train-continuous",

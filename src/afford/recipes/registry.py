@@ -19,7 +19,7 @@ class Recipe:
 
 
 FOOT_COMMIT = "9f1c7cf"  # the commit that ships the recognition net of the footed world
-FOOT_PREDICTION_COMMIT = "0000000"  # the commit that ships the prediction net of the footed world
+FOOT_PREDICTION_COMMIT = "5f8938e"  # the commit that ships the prediction net of the footed world
 _BUILDS = "the MuJoCo and torch builds the data and training first ran on (constraints.txt pins them now)"
 
 # One entry per shipped file, by its path under weights/.

@@ -118,23 +118,6 @@ def report(z: np.ndarray, labels: np.ndarray, scale: float, bias: float) -> Head
     )
 
 
-FOLDS = 5  # contiguous, so a sequence's executions stay in one fold
-
-
-def cross_validated(z: np.ndarray, labels: np.ndarray, kinds: np.ndarray) -> dict[str, float]:
-    """The log-loss on val of the scaling for all types and of the one per type, each execution
-    read through a scaling fitted on the folds without it."""
-    y = labels.astype(float)
-    every, per_type = np.empty(len(z)), np.empty(len(z))
-    for held in np.array_split(np.arange(len(z)), FOLDS):
-        rest = np.setdiff1d(np.arange(len(z)), held)
-        a, b = fit_platt(z[rest], labels[rest])
-        every[held] = 1 / (1 + np.exp(-(a * z[held] + b)))
-        scales, biases = fit_per_type(z[rest], labels[rest], kinds[rest])
-        per_type[held] = 1 / (1 + np.exp(-per_type_logits(z[held], kinds[held], scales, biases)))
-    return {"all": round(_nll(every, y), 4), "per_type": round(_nll(per_type, y), 4)}
-
-
 def calibrate(net: PredictionNet, data: Dataset, limit: int | None = None) -> dict:
     """Platt scaling fitted on val, one for all action types and one per type, and the head on
     val and test with each: a JSON-ready record."""
@@ -142,7 +125,7 @@ def calibrate(net: PredictionNet, data: Dataset, limit: int | None = None) -> di
     scale, bias = fit_platt(z, y)
     scales, biases = fit_per_type(z, y, kinds)
     out = {"choice_scale": round(scale, 4), "choice_bias": round(bias, 4), "fitted_on": "val"}
-    out |= {"choice_scales": scales, "choice_biases": biases, "cross_validated": cross_validated(z, y, kinds)}
+    out |= {"choice_scales": scales, "choice_biases": biases}
     out["val"] = asdict(report(z, y, scale, bias))
     out["val_per_type"] = asdict(report(per_type_logits(z, kinds, scales, biases), y, 1.0, 0.0))
     z, y, kinds = head_logits(net, data, "test", limit)

@@ -35,7 +35,6 @@ from afford.sim.affordances import Affordance
 OUTCOME_FLOOR = 0.05  # a branch less likely than this is dropped (the rest renormalised)
 MOST_BRANCHES = 4  # the likeliest branches a state keeps
 CHUNK = 256  # branches stepped in one call of the net
-RISK = 1.0  # the planners' default weight on the spread of a plan's outcome (`PlannerConfig.risk`)
 
 
 @dataclass

@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from afford.planning.branches import RISK
 from afford.planning.closed_loop import Loop
 from afford.planning.hybrid import ACCEPT
 from afford.planning.tree import SearchConfig, SearchResult
@@ -27,7 +26,7 @@ class PlannerConfig:
     # The learned and object planners with outcomes "expected" (planning/branches.py): a plan
     # scores eq. (5) averaged over the branches of the outcomes foreseen, plus this many
     # standard deviations of it (risk-averse); 0: the mean alone.
-    risk: float = RISK
+    risk: float = 1.0
     # Plan, execute the first action, look at the real state, plan again with the steps left
     # (planning/closed_loop.py); False: the paper's open loop, the whole plan executed blind.
     closed_loop: bool = False

@@ -28,7 +28,7 @@ $(CLUSTER): $(STAMP)
 
 # The learned planner (paper II.D) with the weights shipped in the package: no training step.
 # Task 03 needs a non-canonical effect: a cup at the end of a block balanced on one support tips
-# it, so the block is turned across both supports first (the symbolic baseline's plans all fail).
+# it, so the block is laid across both supports first (the symbolic baseline's plans all fail).
 DEMO_TASK := tasks/paper/03-stable-base.json
 
 demo: install

@@ -23,7 +23,7 @@ from afford.sim.affordances import Affordance
 from afford.sim.scene import ObjectSpec
 from afford.training.checkpoint import save_checkpoint
 
-# The paper task `make demo` plans: turn the block across both supports, then place the cup, or
+# The paper task `make demo` plans: lay the block across both supports, then place the cup, or
 # the block tips (paper IV.C task 3).
 DEMO_TASK = "03-stable-base.json"
 SPECS = [ObjectSpec.upright("cup", 0.05, 0.3), ObjectSpec.upright("block", -0.05, 0.22)]
